@@ -1,0 +1,81 @@
+//! Integrators: the algorithms that turn a camera ray into radiance.
+//!
+//! An integrator is chosen once per render (cold path), so it is a trait object; everything it
+//! calls per ray (shapes, materials, lights) is a closed enum.
+
+mod debug;
+
+pub use debug::{Depth, Flat, Normals, OnOff};
+
+use crate::color::Rgb;
+use crate::math::Ray;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use crate::stats::RayStats;
+
+/// Computes the radiance arriving along a camera ray.
+pub trait Integrator: Sync {
+    /// The radiance arriving at the ray's origin from direction `-ray.d`. Implementations draw
+    /// every random number from `sampler` and count the rays they trace in `stats`.
+    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb;
+}
+
+/// Settings that integrators read (each ignores what it does not use).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IntegratorSettings {
+    /// Path length limit; `None` or -1: the integrator's default (unlimited for `path`).
+    pub max_depth: Option<i32>,
+    /// The course's branching factor for `path`.
+    pub num_of_rays: u32,
+    /// Depth from which Russian roulette starts (Mitsuba's `rr_depth`).
+    pub rr_depth: Option<u32>,
+    /// Hide directly visible emitters (Mitsuba's `hide_emitters`).
+    pub hide_emitters: bool,
+}
+
+/// The integrators selectable by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// White on hit, black on miss.
+    OnOff,
+    /// Colour + emission.
+    Flat,
+    /// Normals as colours.
+    Normals,
+    /// Hit distance.
+    Depth,
+    /// Ray casting with the local Phong model, no shadows.
+    Local,
+    /// The local model with shadow rays.
+    Direct,
+    /// Whitted's recursive ray tracing.
+    Whitted,
+    /// Path tracing of the rendering equation.
+    Path,
+    /// Radiosity.
+    Radiosity,
+}
+
+impl IntegratorKind {
+    /// The command-line names, in order.
+    pub const NAMES: &'static [&'static str] =
+        &["onoff", "flat", "normals", "depth", "local", "direct", "whitted", "path", "radiosity"];
+
+    /// Parses a command-line name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        use IntegratorKind::*;
+        let all = [OnOff, Flat, Normals, Depth, Local, Direct, Whitted, Path, Radiosity];
+        Self::NAMES.iter().position(|&n| n == name).map(|i| all[i])
+    }
+
+    /// The integrator for `scene`, or why it cannot be built.
+    pub fn build(self, _scene: &Scene, _settings: &IntegratorSettings) -> Result<Box<dyn Integrator>, String> {
+        match self {
+            IntegratorKind::OnOff => Ok(Box::new(OnOff)),
+            IntegratorKind::Flat => Ok(Box::new(Flat)),
+            IntegratorKind::Normals => Ok(Box::new(Normals)),
+            IntegratorKind::Depth => Ok(Box::new(Depth)),
+            _ => Err("not supported yet".to_string()),
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! Orthonormal frames (shading frames) built from a single normal.
+
+use super::{Normal3, Vec3};
+
+/// An orthonormal basis `(s, t, n)`: `n` is the local +z axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// Local x axis.
+    pub s: Vec3,
+    /// Local y axis.
+    pub t: Vec3,
+    /// Local z axis (the normal).
+    pub n: Vec3,
+}
+
+impl Frame {
+    /// The basis around a unit normal, without branches on the normal's direction (Duff et al.,
+    /// "Building an Orthonormal Basis, Revisited", JCGT 2017).
+    #[inline]
+    pub fn from_normal(n: Normal3) -> Self {
+        let n = n.to_vec();
+        let sign = 1f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        Self { s, t, n }
+    }
+
+    /// The basis with normal `n` whose first axis is `dpdu` made orthogonal to `n`
+    /// (Gram–Schmidt); falls back to [`Frame::from_normal`] when `dpdu` is degenerate.
+    pub fn from_normal_tangent(n: Normal3, dpdu: Vec3) -> Self {
+        let nv = n.to_vec();
+        let s = dpdu - nv * nv.dot(dpdu);
+        let len = s.norm();
+        if !(len > 1e-8) || !len.is_finite() {
+            return Self::from_normal(n);
+        }
+        let s = s / len;
+        Self { s, t: nv.cross(s), n: nv }
+    }
+
+    /// World → local coordinates.
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
+    /// Local → world coordinates.
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bases_are_orthonormal_and_right_handed() {
+        let normals = [
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.3, -0.4, 0.5),
+            Vec3::new(-0.2, 0.9, -1e-7),
+            Vec3::new(1e-8, -1e-8, -1.0),
+        ];
+        for n in normals {
+            let n = n.normalize();
+            let f = Frame::from_normal(n.to_normal());
+            for (a, b) in [(f.s, f.t), (f.t, f.n), (f.n, f.s)] {
+                assert!(a.dot(b).abs() < 1e-6);
+            }
+            for a in [f.s, f.t, f.n] {
+                assert!((a.norm() - 1.0).abs() < 1e-6);
+            }
+            assert!(f.s.cross(f.t).approx_eq(f.n, 1e-6), "{n:?}");
+            let v = Vec3::new(0.1, 0.2, 0.3);
+            assert!(f.to_world(f.to_local(v)).approx_eq(v, 1e-6));
+        }
+    }
+
+    #[test]
+    fn tangent_frames_keep_the_tangent_direction() {
+        let f = Frame::from_normal_tangent(Normal3::new(0.0, 0.0, 1.0), Vec3::new(2.0, 0.0, 1.0));
+        assert!(f.s.approx_eq(Vec3::X, 1e-6));
+        assert!(f.t.approx_eq(Vec3::Y, 1e-6));
+    }
+}

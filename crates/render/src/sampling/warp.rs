@@ -1,0 +1,153 @@
+//! Warps from the unit square to directions and points, each with its pdf.
+//!
+//! Every routine takes uniform numbers in `[0,1)²` and is deterministic, so that callers may
+//! feed stratified or low-discrepancy samples. Directions are in a local frame whose +z axis is
+//! the normal; pdfs are per unit solid angle (directions) or per unit area (points).
+
+use crate::math::{safe_sqrt, Point2, Vec3, INV_2PI, INV_4PI, INV_PI, PI};
+
+/// Uniform point on the unit disk by Shirley and Chiu's concentric map (low distortion).
+#[inline]
+pub fn square_to_concentric_disk(u: [f32; 2]) -> Point2 {
+    let ox = 2.0 * u[0] - 1.0;
+    let oy = 2.0 * u[1] - 1.0;
+    if ox == 0.0 && oy == 0.0 {
+        return Point2::new(0.0, 0.0);
+    }
+    let (r, theta) = if ox.abs() > oy.abs() {
+        (ox, (PI / 4.0) * (oy / ox))
+    } else {
+        (oy, PI / 2.0 - (PI / 4.0) * (ox / oy))
+    };
+    Point2::new(r * theta.cos(), r * theta.sin())
+}
+
+/// Cosine-weighted direction on the hemisphere z > 0 (Malley's method).
+#[inline]
+pub fn square_to_cosine_hemisphere(u: [f32; 2]) -> Vec3 {
+    let d = square_to_concentric_disk(u);
+    let z = safe_sqrt(1.0 - d.x * d.x - d.y * d.y);
+    Vec3::new(d.x, d.y, z)
+}
+
+/// The pdf of [`square_to_cosine_hemisphere`]: cos θ / π (0 below the horizon).
+#[inline]
+pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
+    if cos_theta > 0.0 {
+        cos_theta * INV_PI
+    } else {
+        0.0
+    }
+}
+
+/// Uniform direction on the hemisphere z ≥ 0.
+#[inline]
+pub fn square_to_uniform_hemisphere(u: [f32; 2]) -> Vec3 {
+    let z = u[0];
+    let r = safe_sqrt(1.0 - z * z);
+    let phi = 2.0 * PI * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The pdf of [`square_to_uniform_hemisphere`]: 1/(2π).
+#[inline]
+pub fn uniform_hemisphere_pdf() -> f32 {
+    INV_2PI
+}
+
+/// Uniform direction on the unit sphere.
+#[inline]
+pub fn square_to_uniform_sphere(u: [f32; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let r = safe_sqrt(1.0 - z * z);
+    let phi = 2.0 * PI * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The pdf of [`square_to_uniform_sphere`]: 1/(4π).
+#[inline]
+pub fn uniform_sphere_pdf() -> f32 {
+    INV_4PI
+}
+
+/// Uniform direction in the cone around +z of half-angle θ_max (`cos_max = cos θ_max`).
+#[inline]
+pub fn square_to_uniform_cone(u: [f32; 2], cos_max: f32) -> Vec3 {
+    let z = 1.0 - u[0] * (1.0 - cos_max);
+    let r = safe_sqrt(1.0 - z * z);
+    let phi = 2.0 * PI * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The pdf of [`square_to_uniform_cone`]: 1/(2π(1 − cos θ_max)).
+#[inline]
+pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * (1.0 - cos_max))
+}
+
+/// Uniform barycentric coordinates (b1, b2) on a triangle (the square-root parametrisation);
+/// the pdf is 1/area of the triangle.
+#[inline]
+pub fn square_to_uniform_triangle(u: [f32; 2]) -> (f32, f32) {
+    let su = u[0].sqrt();
+    (1.0 - su, u[1] * su)
+}
+
+/// The power heuristic (β = 2) weight of a strategy with pdf `f` (taking `nf` samples) against
+/// one with pdf `g` (taking `ng` samples) (Veach 1997).
+#[inline]
+pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
+    let f = nf * f_pdf;
+    let g = ng * g_pdf;
+    if f.is_infinite() {
+        return 1.0;
+    }
+    if f == 0.0 {
+        return 0.0;
+    }
+    (f * f) / (f * f + g * g)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize) -> impl Iterator<Item = [f32; 2]> {
+        (0..n * n).map(move |i| [((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32])
+    }
+
+    #[test]
+    fn warped_directions_are_unit_and_in_their_domain() {
+        for u in grid(32) {
+            let d = square_to_cosine_hemisphere(u);
+            assert!((d.norm() - 1.0).abs() < 1e-5 && d.z >= 0.0);
+            let d = square_to_uniform_hemisphere(u);
+            assert!((d.norm() - 1.0).abs() < 1e-5 && d.z >= 0.0);
+            let d = square_to_uniform_sphere(u);
+            assert!((d.norm() - 1.0).abs() < 1e-5);
+            let d = square_to_uniform_cone(u, 0.8);
+            assert!((d.norm() - 1.0).abs() < 1e-5 && d.z >= 0.8 - 1e-6);
+            let (b1, b2) = square_to_uniform_triangle(u);
+            assert!(b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0);
+            let p = square_to_concentric_disk(u);
+            assert!(p.x * p.x + p.y * p.y <= 1.0 + 1e-6);
+        }
+    }
+
+    #[test]
+    fn cosine_hemisphere_has_the_right_mean_cosine() {
+        // E[cos θ] under pdf cos θ/π is 2/3.
+        let n = 256;
+        let mean: f64 = grid(n).map(|u| square_to_cosine_hemisphere(u).z as f64).sum::<f64>() / (n * n) as f64;
+        assert!((mean - 2.0 / 3.0).abs() < 1e-3, "{mean}");
+    }
+
+    #[test]
+    fn power_heuristic_weights_sum_to_one() {
+        let w1 = power_heuristic(1.0, 0.3, 1.0, 0.7);
+        let w2 = power_heuristic(1.0, 0.7, 1.0, 0.3);
+        assert!((w1 + w2 - 1.0).abs() < 1e-6);
+        assert_eq!(power_heuristic(1.0, f32::INFINITY, 1.0, 3.0), 1.0);
+        assert_eq!(power_heuristic(1.0, 0.0, 1.0, 3.0), 0.0);
+    }
+}

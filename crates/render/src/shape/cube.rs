@@ -1,0 +1,155 @@
+//! The cube [-1, 1]³ placed by a transformation (`box(MAT, T)`, Mitsuba `cube`).
+//!
+//! Intersected by slabs in the cube's frame. The hit face decides the normal (±x, ±y, ±z in
+//! the cube's frame, then by the inverse transpose) and the uv: the face's two other
+//! coordinates mapped from [-1, 1] to [0, 1] (x-faces: (y, z); y-faces: (x, z); z-faces: (x, y)).
+
+use super::{LocalGeometry, ShapeHit};
+use crate::math::{Bounds3, Normal3, Point2, Point3, Ray, Transform, Vec3};
+
+/// The cube [-1,1]³ placed by `world_from_object`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cube {
+    /// Object → world.
+    pub world_from_object: Transform,
+}
+
+/// A crossing of a ray with a convex solid: the parameter and the face crossed.
+pub type Crossing = (f32, u32);
+
+impl Cube {
+    /// A cube placed by `t`.
+    pub fn new(world_from_object: Transform) -> Self {
+        Self { world_from_object }
+    }
+
+    /// Where the ray's line enters and leaves the cube (parameters and faces), or `None`.
+    /// Face ids are `2·axis + (1 if the + side)`.
+    #[inline]
+    pub fn crossings(&self, ray: &Ray) -> Option<(Crossing, Crossing)> {
+        let o = self.world_from_object.inv_point(ray.o);
+        let d = self.world_from_object.inv_vector(ray.d);
+        let mut near = (f32::NEG_INFINITY, 0u32);
+        let mut far = (f32::INFINITY, 0u32);
+        for axis in 0..3 {
+            let (oa, da) = (o[axis], d[axis]);
+            if da == 0.0 {
+                if !(-1.0..=1.0).contains(&oa) {
+                    return None;
+                }
+                continue;
+            }
+            let inv = 1.0 / da;
+            let (t_minus, t_plus) = ((-1.0 - oa) * inv, (1.0 - oa) * inv);
+            let a = axis as u32 * 2;
+            let (tn, tf) = if t_minus < t_plus { ((t_minus, a), (t_plus, a + 1)) } else { ((t_plus, a + 1), (t_minus, a)) };
+            if tn.0 > near.0 {
+                near = tn;
+            }
+            if tf.0 < far.0 {
+                far = tf;
+            }
+        }
+        (near.0 <= far.0).then_some((near, far))
+    }
+
+    /// The closest crossing inside the ray's interval.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<ShapeHit> {
+        let (near, far) = self.crossings(ray)?;
+        let (t, face) = if near.0 > ray.tmin { near } else { far };
+        (t > ray.tmin && t < ray.tmax).then_some(ShapeHit {
+            t,
+            uv: [0.0; 2],
+            sub: face,
+            leaf: 0,
+        })
+    }
+
+    /// The surface where the ray crosses `face` at `t`.
+    pub fn geometry(&self, ray: &Ray, t: f32, face: u32) -> LocalGeometry {
+        let w = &self.world_from_object;
+        let mut q = w.inv_point(ray.o) + w.inv_vector(ray.d) * t;
+        let axis = (face / 2) as usize;
+        let sign = if face % 2 == 1 { 1.0 } else { -1.0 };
+        // Snap onto the face and keep the other coordinates on the cube.
+        let clamp = |x: f32| x.clamp(-1.0, 1.0);
+        q = Point3::new(clamp(q.x), clamp(q.y), clamp(q.z));
+        let mut n = Vec3::ZERO;
+        match axis {
+            0 => {
+                q.x = sign;
+                n.x = sign;
+            }
+            1 => {
+                q.y = sign;
+                n.y = sign;
+            }
+            _ => {
+                q.z = sign;
+                n.z = sign;
+            }
+        }
+        let (a, b, tangent) = match axis {
+            0 => (q.y, q.z, Vec3::Y),
+            1 => (q.x, q.z, Vec3::X),
+            _ => (q.x, q.y, Vec3::X),
+        };
+        let nw = w.normal(Normal3::new(n.x, n.y, n.z)).normalize();
+        LocalGeometry {
+            p: w.point(q),
+            n: nw,
+            ns: nw,
+            uv: Point2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5),
+            dpdu: w.vector(tangent * 2.0),
+        }
+    }
+
+    /// Bounds of the transformed corners.
+    pub fn bounds(&self) -> Bounds3 {
+        Bounds3::new(Point3::new(-1.0, -1.0, -1.0), Point3::new(1.0, 1.0, 1.0)).transform(&self.world_from_object)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hits_by_hand() {
+        let c = Cube::new(Transform::IDENTITY);
+        let r = Ray::new(Point3::new(-3.0, 0.5, 0.0), Vec3::X);
+        let h = c.intersect(&r).unwrap();
+        assert_eq!((h.t, h.sub), (2.0, 0));
+        let g = c.geometry(&r, h.t, h.sub);
+        assert_eq!(g.p, Point3::new(-1.0, 0.5, 0.0));
+        assert_eq!(g.n, Normal3::new(-1.0, 0.0, 0.0));
+        assert_eq!((g.uv.x, g.uv.y), (0.75, 0.5));
+        // From inside: the exit face, with its outward normal.
+        let r = Ray::new(Point3::ORIGIN, Vec3::new(0.0, 0.0, 1.0));
+        let h = c.intersect(&r).unwrap();
+        assert_eq!((h.t, h.sub), (1.0, 5));
+        assert_eq!(c.geometry(&r, h.t, h.sub).n, Normal3::new(0.0, 0.0, 1.0));
+        // Parallel to faces: inside the slab, and outside it.
+        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 2.0, 0.0), Vec3::X)).is_none());
+        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 1.0, 0.0), Vec3::X)).is_some());
+        // Along an edge and through a vertex.
+        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 1.0, 1.0), Vec3::X)).is_some());
+        let diag = Ray::new(Point3::new(-2.0, -2.0, -2.0), Vec3::new(1.0, 1.0, 1.0));
+        assert_eq!(c.intersect(&diag).unwrap().t, 1.0);
+        // Pointing away.
+        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 0.0, 0.0), -Vec3::X)).is_none());
+    }
+
+    #[test]
+    fn transformed_cube_by_hand() {
+        let c = Cube::new(Transform::translation(Vec3::new(0.0, 0.0, 5.0)) * Transform::scaling(Vec3::new(1.0, 1.0, 2.0)));
+        let r = Ray::new(Point3::ORIGIN, Vec3::Z);
+        let h = c.intersect(&r).unwrap();
+        assert_eq!((h.t, h.sub), (3.0, 4));
+        let g = c.geometry(&r, h.t, h.sub);
+        assert_eq!(g.n, Normal3::new(0.0, 0.0, -1.0));
+        assert_eq!(g.p, Point3::new(0.0, 0.0, 3.0));
+        assert_eq!(c.bounds(), Bounds3::new(Point3::new(-1.0, -1.0, 3.0), Point3::new(1.0, 1.0, 7.0)));
+    }
+}

@@ -1,0 +1,297 @@
+//! Triangle meshes and the watertight ray–triangle test.
+//!
+//! Scene syntax: `triangle(MAT, [a], [b], [c])` (a one-triangle mesh), `mesh(MAT, T, "file")`
+//! (OBJ or PLY), Mitsuba `obj`/`ply`. A mesh stores one array per attribute, in world space;
+//! a triangle is an index into its mesh.
+//!
+//! The intersection is the watertight test of Woop, Benthin and Wald (JCGT 2013): the ray is
+//! sheared so that it runs along +z, and the triangle's 2D edge functions decide the inside
+//! test β ≥ 0, γ ≥ 0, β + γ ≤ 1 consistently along shared edges, so that rays never leak
+//! between adjacent triangles. uv = (β, γ) unless the mesh has texture coordinates; the
+//! geometric normal is (B−A)×(C−A); the shading normal interpolates vertex normals.
+
+use super::{LocalGeometry, ShapeHit};
+use crate::interaction::SurfaceProps;
+use crate::math::{Bounds3, Normal3, Point2, Point3, Ray};
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<Point3>,
+    /// Vertex normals: empty, or one per vertex.
+    pub normals: Vec<Normal3>,
+    /// Vertex texture coordinates: empty, or one per vertex.
+    pub uvs: Vec<Point2>,
+    /// Vertex indices of each triangle.
+    pub indices: Vec<[u32; 3]>,
+    /// Material, emission and light of every triangle.
+    pub props: SurfaceProps,
+}
+
+/// The ray in the sheared space of the watertight test, computed once per ray.
+#[derive(Clone, Copy, Debug)]
+pub struct ShearedRay {
+    k: [usize; 3],
+    s: [f32; 3],
+}
+
+impl ShearedRay {
+    /// Precomputes the permutation and shear of `ray`.
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let kz = ray.d.max_dimension();
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if ray.d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let dz = ray.d[kz];
+        Self {
+            k: [kx, ky, kz],
+            s: [ray.d[kx] / dz, ray.d[ky] / dz, 1.0 / dz],
+        }
+    }
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// True when the mesh has no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    /// The vertices of triangle `i`.
+    #[inline]
+    pub fn vertices(&self, i: u32) -> [Point3; 3] {
+        let [a, b, c] = self.indices[i as usize];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// Bounds of triangle `i`.
+    pub fn triangle_bounds(&self, i: u32) -> Bounds3 {
+        let [a, b, c] = self.vertices(i);
+        Bounds3::point(a).union_point(b).union_point(c)
+    }
+
+    /// Area of triangle `i`.
+    pub fn area(&self, i: u32) -> f32 {
+        let [a, b, c] = self.vertices(i);
+        0.5 * (b - a).cross(c - a).norm()
+    }
+
+    /// Intersects triangle `i`; `uv` of the hit holds the barycentrics (β, γ) of B and C.
+    #[inline]
+    pub fn intersect(&self, i: u32, ray: &Ray, sr: &ShearedRay) -> Option<ShapeHit> {
+        let [a, b, c] = self.vertices(i);
+        intersect_triangle(a, b, c, ray, sr)
+    }
+
+    /// The surface of triangle `i` at barycentrics (β, γ).
+    pub fn geometry(&self, i: u32, beta: f32, gamma: f32) -> LocalGeometry {
+        let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);
+        let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
+        let alpha = 1.0 - beta - gamma;
+        let p = Point3::new(
+            alpha * a.x + beta * b.x + gamma * c.x,
+            alpha * a.y + beta * b.y + gamma * c.y,
+            alpha * a.z + beta * b.z + gamma * c.z,
+        );
+        let (e1, e2) = (b - a, c - a);
+        let mut n = e1.cross(e2).normalize().to_normal();
+        if !n.x.is_finite() {
+            n = Normal3::new(0.0, 0.0, 1.0);
+        }
+        let ns = if self.normals.is_empty() {
+            n
+        } else {
+            let s = self.normals[ia] * alpha + self.normals[ib] * beta + self.normals[ic] * gamma;
+            let len = s.to_vec().norm();
+            if len > 0.0 && len.is_finite() {
+                s / len
+            } else {
+                n
+            }
+        };
+        // The geometric normal follows the winding, but agrees with the shading normal's side.
+        if !self.normals.is_empty() && n.dot_vec(ns.to_vec()) < 0.0 {
+            n = -n;
+        }
+        let (uv, dpdu) = if self.uvs.is_empty() {
+            (Point2::new(beta, gamma), e1)
+        } else {
+            let [ta, tb, tc] = [self.uvs[ia], self.uvs[ib], self.uvs[ic]];
+            let uv = Point2::new(
+                alpha * ta.x + beta * tb.x + gamma * tc.x,
+                alpha * ta.y + beta * tb.y + gamma * tc.y,
+            );
+            // Solve [e1 e2] = [dpdu dpdv]·[[du1 du2],[dv1 dv2]] for dpdu.
+            let (du1, du2, dv1, dv2) = (tb.x - ta.x, tc.x - ta.x, tb.y - ta.y, tc.y - ta.y);
+            let det = du1 * dv2 - du2 * dv1;
+            let dpdu = if det.abs() > 1e-12 { (e1 * dv2 - e2 * dv1) / det } else { e1 };
+            (uv, dpdu)
+        };
+        LocalGeometry { p, n, ns, uv, dpdu }
+    }
+
+    /// The mesh moved by `t` (positions by `t`, normals by its inverse transpose).
+    pub fn transformed(&self, t: &crate::math::Transform) -> Mesh {
+        let mut m = self.clone();
+        for p in &mut m.positions {
+            *p = t.point(*p);
+        }
+        for n in &mut m.normals {
+            *n = t.normal(*n).normalize();
+        }
+        if t.swaps_handedness() {
+            // Keep the winding outward: a mirror image reverses it.
+            for tri in &mut m.indices {
+                tri.swap(1, 2);
+            }
+        }
+        m
+    }
+
+    /// The point at barycentrics (β, γ) of triangle `i` with its geometric normal (for light
+    /// sampling).
+    pub fn point(&self, i: u32, beta: f32, gamma: f32) -> (Point3, Normal3) {
+        let g = self.geometry(i, beta, gamma);
+        (g.p, g.n)
+    }
+}
+
+/// The watertight ray–triangle test. Returns `t` and (β, γ) in `uv`.
+#[inline]
+pub fn intersect_triangle(a: Point3, b: Point3, c: Point3, ray: &Ray, sr: &ShearedRay) -> Option<ShapeHit> {
+    let [kx, ky, kz] = sr.k;
+    let [sx, sy, sz] = sr.s;
+    // Translate the vertices to the ray origin, then shear so that the ray runs along +z.
+    let (pa, pb, pc) = (a - ray.o, b - ray.o, c - ray.o);
+    let (ax, ay) = (pa[kx] - sx * pa[kz], pa[ky] - sy * pa[kz]);
+    let (bx, by) = (pb[kx] - sx * pb[kz], pb[ky] - sy * pb[kz]);
+    let (cx, cy) = (pc[kx] - sx * pc[kz], pc[ky] - sy * pc[kz]);
+    // The scaled barycentrics are the 2D edge functions.
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    // On an edge, f32 cannot decide the sign: redo the edge functions in f64.
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        let f = |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
+        u = f(cx, by, cy, bx);
+        v = f(ax, cy, ay, cx);
+        w = f(bx, ay, by, ax);
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let (az, bz, cz) = (sz * pa[kz], sz * pb[kz], sz * pc[kz]);
+    let t_scaled = u * az + v * bz + w * cz;
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return None;
+    }
+    Some(ShapeHit {
+        t,
+        uv: [v * inv_det, w * inv_det],
+        sub: 0,
+        leaf: 0,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    fn one(a: Point3, b: Point3, c: Point3) -> Mesh {
+        Mesh {
+            positions: vec![a, b, c],
+            indices: vec![[0, 1, 2]],
+            ..Default::default()
+        }
+    }
+
+    fn hit(m: &Mesh, r: &Ray) -> Option<ShapeHit> {
+        m.intersect(0, r, &ShearedRay::new(r))
+    }
+
+    #[test]
+    fn hits_by_hand() {
+        let m = one(Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0));
+        let r = Ray::new(Point3::new(0.25, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0));
+        let h = hit(&m, &r).unwrap();
+        assert_eq!(h.t, 2.0);
+        assert_eq!(h.uv, [0.25, 0.5]);
+        let g = m.geometry(0, h.uv[0], h.uv[1]);
+        assert_eq!(g.p, Point3::new(0.25, 0.5, 0.0));
+        assert_eq!(g.n, Normal3::new(0.0, 0.0, 1.0));
+        assert_eq!((g.uv.x, g.uv.y), (0.25, 0.5));
+        // From below: same hit, same (unflipped) normal.
+        let r = Ray::new(Point3::new(0.25, 0.5, -3.0), Vec3::new(0.0, 0.0, 1.0));
+        assert_eq!(hit(&m, &r).unwrap().t, 3.0);
+        // Outside the triangle, parallel to it, behind the ray.
+        assert!(hit(&m, &Ray::new(Point3::new(0.75, 0.75, 2.0), Vec3::new(0.0, 0.0, -1.0))).is_none());
+        assert!(hit(&m, &Ray::new(Point3::new(-1.0, 0.25, 0.0), Vec3::X)).is_none());
+        assert!(hit(&m, &Ray::new(Point3::new(0.25, 0.25, 2.0), Vec3::Z)).is_none());
+    }
+
+    #[test]
+    fn edges_and_vertices_count_as_inside() {
+        let m = one(Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0));
+        for (x, y) in [(0.5, 0.0), (0.0, 0.5), (0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] {
+            let r = Ray::new(Point3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
+            assert!(hit(&m, &r).is_some(), "({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn shared_edges_do_not_leak() {
+        // A unit square of two triangles, and many rays aimed exactly at its diagonal.
+        let m = Mesh {
+            positions: vec![
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(1.0, 1.0, 0.0),
+                Point3::new(0.0, 1.0, 0.0),
+            ],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            ..Default::default()
+        };
+        let mut rng = crate::sampling::Pcg32::new(5, 6);
+        for _ in 0..10_000 {
+            let s = rng.next_f32();
+            let target = Point3::new(s, s, 0.0);
+            let o = Point3::new(rng.next_f32() * 4.0 - 2.0, rng.next_f32() * 4.0 - 2.0, 1.0 + rng.next_f32());
+            let r = Ray::new(o, target - o);
+            let sr = ShearedRay::new(&r);
+            assert!(m.intersect(0, &r, &sr).is_some() || m.intersect(1, &r, &sr).is_some(), "{r:?}");
+        }
+    }
+
+    #[test]
+    fn vertex_normals_and_uvs_are_interpolated() {
+        let mut m = one(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 0.0, 0.0), Point3::new(0.0, 2.0, 0.0));
+        m.normals = vec![
+            Normal3::new(0.0, 0.0, 1.0),
+            Normal3::new(1.0, 0.0, 0.0),
+            Normal3::new(0.0, 1.0, 0.0),
+        ];
+        m.uvs = vec![Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(0.0, 1.0)];
+        let g = m.geometry(0, 0.5, 0.0);
+        assert!(g.ns.to_vec().approx_eq(Vec3::new(1.0, 0.0, 1.0).normalize(), 1e-6));
+        assert_eq!((g.uv.x, g.uv.y), (0.5, 0.0));
+        assert!(g.dpdu.approx_eq(Vec3::new(2.0, 0.0, 0.0), 1e-6));
+        // Vertex normals pointing below flip the geometric normal to their side.
+        m.normals = vec![Normal3::new(0.0, 0.0, -1.0); 3];
+        assert_eq!(m.geometry(0, 0.2, 0.2).n, Normal3::new(0.0, 0.0, -1.0));
+    }
+}
