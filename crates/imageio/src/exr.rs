@@ -1,0 +1,228 @@
+//! OpenEXR through the `exr` crate.
+//!
+//! Reading takes the full-resolution level of the first layer that has an `R`, `G` or `B`
+//! channel; failing that, the first layer with a `Y` (luminance) channel, whose value is
+//! replicated to all three channels. Channels that are missing (or subsampled) read as 0;
+//! alpha and other channels are ignored. Samples may be f16, f32 or u32. Pixel `(0, 0)` is
+//! the top-left corner of the data window, as in [`Image`].
+//!
+//! Writing produces a single-layer scan-line file with f32 `R`, `G`, `B` channels, no alpha,
+//! and lossless compression.
+
+use std::io::Cursor;
+
+use ::exr::prelude::{
+    traits::*, AnyChannels, FlatSamples, Image as ExrImage, Layer, SpecificChannels, Vec2,
+};
+use candela_render::{Image, Rgb};
+
+use crate::{check_size, image_from_pixels, ImageError};
+
+/// A decoded layer with all its channels.
+type FlatLayer = Layer<AnyChannels<FlatSamples>>;
+
+/// Decodes an OpenEXR file held in memory.
+pub fn read_exr(bytes: &[u8]) -> Result<Image, ImageError> {
+    let decoded = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|cause| ImageError::Exr {
+            action: "decode",
+            cause,
+        })?;
+    let layers = &decoded.layer_data;
+    let with_any = |names: &[&str]| {
+        layers
+            .iter()
+            .find(|layer| names.iter().any(|name| channel(layer, name).is_some()))
+    };
+    let layer = with_any(&["R", "G", "B"])
+        .or_else(|| with_any(&["Y"]))
+        .ok_or_else(|| ImageError::ExrNoColour {
+            found: channel_names(layers.first()),
+        })?;
+
+    let [r, g, b] = match ["R", "G", "B"].map(|name| channel(layer, name)) {
+        [None, None, None] => [channel(layer, "Y"); 3],
+        rgb => rgb,
+    };
+    let sample = |c: Option<&FlatSamples>, i| c.map_or(0.0, |s| s.value_by_flat_index(i).to_f32());
+    let (width, height) = (layer.size.width(), layer.size.height());
+    let pixels = (0..width * height).map(|i| Rgb::new(sample(r, i), sample(g, i), sample(b, i)));
+    Ok(image_from_pixels(width, height, pixels))
+}
+
+/// Encodes `img` as an OpenEXR file with f32 RGB channels.
+pub fn write_exr(img: &Image) -> Result<Vec<u8>, ImageError> {
+    check_size(img.width(), img.height())?;
+    let channels = SpecificChannels::rgb(|Vec2(x, y)| {
+        let p = img.get(x, y);
+        (p.r, p.g, p.b)
+    });
+    let mut out = Cursor::new(Vec::new());
+    ExrImage::from_channels((img.width(), img.height()), channels)
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|cause| ImageError::Exr {
+            action: "encode",
+            cause,
+        })?;
+    Ok(out.into_inner())
+}
+
+/// The samples of the channel called `name`, if it has one sample per pixel.
+fn channel<'a>(layer: &'a FlatLayer, name: &str) -> Option<&'a FlatSamples> {
+    let pixels = layer.size.width().checked_mul(layer.size.height());
+    layer
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.eq(name))
+        .map(|c| &c.sample_data)
+        .filter(|s| Some(s.len()) == pixels)
+}
+
+/// The channel names of `layer`, for error messages.
+fn channel_names(layer: Option<&FlatLayer>) -> String {
+    let names: Vec<String> = layer
+        .into_iter()
+        .flat_map(|l| &l.channel_data.list)
+        .map(|c| c.name.to_string())
+        .collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use ::exr::prelude::{f16, Encoding, ImageAttributes, IntegerBounds, LayerAttributes};
+
+    use super::*;
+
+    /// A 3×2 image with distinct HDR values, including a negative one and fractions.
+    fn sample_image() -> Image {
+        let mut img = Image::new(3, 2);
+        for (i, p) in img.pixels_mut().iter_mut().enumerate() {
+            let i = i as f32;
+            *p = Rgb::new(i * 1000.5, -i / 7.0, i + 0.25);
+        }
+        img
+    }
+
+    /// Encodes a layer built by the caller.
+    fn encode<C>(channels: C) -> Vec<u8>
+    where
+        C: for<'s> ::exr::image::write::channels::WritableChannels<'s>,
+    {
+        let mut out = Cursor::new(Vec::new());
+        ExrImage::from_channels((2, 1), channels)
+            .write()
+            .to_buffered(&mut out)
+            .unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn round_trips_exactly_in_memory() {
+        let img = sample_image();
+        assert_eq!(read_exr(&write_exr(&img).unwrap()).unwrap(), img);
+    }
+
+    #[test]
+    fn round_trips_through_a_temporary_file() {
+        let path =
+            std::env::temp_dir().join(format!("candela-imageio-exr-{}.exr", std::process::id()));
+        let img = sample_image();
+        std::fs::write(&path, write_exr(&img).unwrap()).unwrap();
+        let back = read_exr(&std::fs::read(&path).unwrap());
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(back.unwrap(), img);
+    }
+
+    #[test]
+    fn grey_files_are_replicated_and_missing_channels_are_zero() {
+        let y = SpecificChannels::build()
+            .with_channel("Y")
+            .with_pixel_fn(|Vec2(x, _)| (x as f32 + 0.5,));
+        let img = read_exr(&encode(y)).unwrap();
+        assert_eq!(img.pixels(), [Rgb::splat(0.5), Rgb::splat(1.5)]);
+
+        // Red only (as f16) plus alpha: green and blue are 0, alpha is ignored.
+        let ra = SpecificChannels::build()
+            .with_channel("A")
+            .with_channel("R")
+            .with_pixel_fn(|Vec2(x, _)| (0.25f32, f16::from_f32(x as f32 + 2.0)));
+        let img = read_exr(&encode(ra)).unwrap();
+        assert_eq!(
+            img.pixels(),
+            [Rgb::new(2.0, 0.0, 0.0), Rgb::new(3.0, 0.0, 0.0)]
+        );
+    }
+
+    #[test]
+    fn reads_the_first_layer_with_colour() {
+        let size = Vec2(2, 1);
+        let depth = Layer::new(
+            size,
+            LayerAttributes::named("depth"),
+            Encoding::FAST_LOSSLESS,
+            SpecificChannels::build()
+                .with_channel("Z")
+                .with_pixel_fn(|_| (9.0f32,)),
+        );
+        let colour = Layer::new(
+            size,
+            LayerAttributes::named("colour"),
+            Encoding::FAST_LOSSLESS,
+            SpecificChannels::rgba(|Vec2(x, _)| (x as f32, 2.0f32, 3.0f32, 0.5f32)),
+        );
+        let image = ExrImage::empty(ImageAttributes::new(IntegerBounds::from_dimensions(size)))
+            .with_layer(depth)
+            .with_layer(colour);
+        let mut out = Cursor::new(Vec::new());
+        image.write().to_buffered(&mut out).unwrap();
+        let img = read_exr(&out.into_inner()).unwrap();
+        assert_eq!(
+            img.pixels(),
+            [Rgb::new(0.0, 2.0, 3.0), Rgb::new(1.0, 2.0, 3.0)]
+        );
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        let z = SpecificChannels::build()
+            .with_channel("Z")
+            .with_pixel_fn(|_| (1.0f32,));
+        let err = read_exr(&encode(z)).unwrap_err();
+        assert!(matches!(err, ImageError::ExrNoColour { .. }), "{err}");
+        assert!(err.to_string().contains("channels found: Z"), "{err}");
+
+        let err = read_exr(b"definitely not an EXR file").unwrap_err();
+        assert!(
+            matches!(
+                err,
+                ImageError::Exr {
+                    action: "decode",
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let good = write_exr(&sample_image()).unwrap();
+        for len in [0, 4, 50, good.len() / 2, good.len() - 1] {
+            assert!(read_exr(&good[..len]).is_err(), "{len}");
+        }
+
+        assert!(matches!(
+            write_exr(&Image::new(0, 4)),
+            Err(ImageError::EmptyImage { .. })
+        ));
+    }
+}

@@ -1,0 +1,249 @@
+//! candela's image files: PFM, OpenEXR and PNG, plus the course's tone mapping.
+//!
+//! The format of a file is chosen by its extension, case-insensitively: `.pfm` and `.exr`
+//! hold linear HDR data, `.png` holds tone-mapped 8-bit sRGB-ish data (see [`ToneMap`]).
+//! [`read_image`] and [`write_image`] cover the common case; the per-format modules offer
+//! in-memory codecs.
+//!
+//! Writing is atomic: the file is encoded fully in memory, written to a hidden temporary file
+//! in the target's directory, flushed to disk and renamed onto the target. On failure the
+//! temporary file is removed and an existing target is left untouched, so an interrupted or
+//! failed render never leaves a half-written image behind.
+
+pub mod error;
+pub mod exr;
+pub mod pfm;
+pub mod png;
+pub mod tonemap;
+
+use std::{
+    ffi::OsString,
+    fs,
+    io::Write,
+    path::Path,
+    sync::atomic::{AtomicU64, Ordering},
+};
+
+use candela_render::{Image, Rgb};
+
+pub use error::ImageError;
+pub use pfm::{read_pfm, read_pfm_file, write_pfm};
+pub use tonemap::{Encoding, ToneMap};
+
+/// The largest width or height this crate writes (OpenEXR and PNG store sides as 31-bit
+/// integers).
+pub const MAX_SIDE: usize = i32::MAX as usize;
+
+/// A supported image file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Format {
+    /// Portable Float Map: linear f32 RGB.
+    Pfm,
+    /// OpenEXR: linear RGB (written as f32).
+    Exr,
+    /// PNG: tone-mapped 8-bit RGB.
+    Png,
+}
+
+impl Format {
+    /// All formats, in the order they are listed to users.
+    pub const ALL: [Format; 3] = [Format::Pfm, Format::Exr, Format::Png];
+
+    /// The file extension, lower-case and without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Pfm => "pfm",
+            Format::Exr => "exr",
+            Format::Png => "png",
+        }
+    }
+
+    /// The format named by `path`'s extension (case-insensitive), or
+    /// [`ImageError::UnsupportedExtension`].
+    pub fn from_path(path: &Path) -> Result<Format, ImageError> {
+        let extension = path.extension().unwrap_or_default().to_string_lossy();
+        Format::ALL
+            .into_iter()
+            .find(|f| extension.eq_ignore_ascii_case(f.extension()))
+            .ok_or_else(|| ImageError::UnsupportedExtension {
+                path: path.to_path_buf(),
+                extension: extension.into_owned(),
+            })
+    }
+
+    /// Decodes a file of this format held in memory to linear RGB.
+    pub fn decode(self, bytes: &[u8]) -> Result<Image, ImageError> {
+        match self {
+            Format::Pfm => pfm::read_pfm(bytes),
+            Format::Exr => exr::read_exr(bytes),
+            Format::Png => png::read_png(bytes),
+        }
+    }
+
+    /// Encodes `img` in this format; `tonemap` is used for PNG only.
+    pub fn encode(self, img: &Image, tonemap: &ToneMap) -> Result<Vec<u8>, ImageError> {
+        match self {
+            Format::Pfm => check_size(img.width(), img.height()).map(|()| pfm::write_pfm(img)),
+            Format::Exr => exr::write_exr(img),
+            Format::Png => png::write_png(img.width(), img.height(), &tonemap.apply(img)),
+        }
+    }
+}
+
+/// True when `path` has an extension that [`write_image`] and [`read_image`] support, so that
+/// output paths can be validated before a long render.
+pub fn supported_extension(path: &Path) -> bool {
+    Format::from_path(path).is_ok()
+}
+
+/// Reads an image, choosing the decoder by the file's extension.
+pub fn read_image(path: &Path) -> Result<Image, ImageError> {
+    read_as(path, Format::from_path(path)?)
+}
+
+/// Writes an image atomically, choosing the encoder by the file's extension: `.pfm` and
+/// `.exr` get linear data, `.png` gets the bytes of `tonemap`.
+///
+/// An unsupported extension is reported before anything is written. The data goes to a
+/// temporary file next to `path` that is then renamed onto it; on any failure the temporary
+/// file is removed and an existing file at `path` is left as it was.
+pub fn write_image(path: &Path, img: &Image, tonemap: &ToneMap) -> Result<(), ImageError> {
+    let format = Format::from_path(path)?;
+    let bytes = format.encode(img, tonemap).map_err(|e| e.in_file(path))?;
+    write_atomically(path, &bytes)
+}
+
+/// Reads and decodes `path` as `format`.
+pub(crate) fn read_as(path: &Path, format: Format) -> Result<Image, ImageError> {
+    let bytes = fs::read(path).map_err(ImageError::io(path, "read"))?;
+    format.decode(&bytes).map_err(|e| e.in_file(path))
+}
+
+/// Writes `bytes` to a temporary file beside `path`, flushes it and renames it onto `path`.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let Some(name) = path.file_name() else {
+        let cause = std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name");
+        return Err(ImageError::io(path, "write")(cause));
+    };
+    let mut temp_name = OsString::from(".");
+    temp_name.push(name);
+    temp_name.push(format!(
+        ".tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let temp = path.with_file_name(temp_name);
+
+    let mut file = fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&temp)
+        .map_err(ImageError::io(path, "create temporary file"))?;
+    let result = file
+        .write_all(bytes)
+        .and_then(|()| file.sync_all())
+        .map_err(ImageError::io(path, "write"))
+        .and_then(|()| {
+            drop(file);
+            fs::rename(&temp, path)
+                .map_err(ImageError::io(path, "rename temporary file into place"))
+        });
+    if result.is_err() {
+        // Best effort: the original error is what matters.
+        let _ = fs::remove_file(&temp);
+    }
+    result
+}
+
+/// Fails with [`ImageError::EmptyImage`] or [`ImageError::TooLarge`] unless a
+/// `width`×`height` image can be written.
+pub(crate) fn check_size(width: usize, height: usize) -> Result<(), ImageError> {
+    if width == 0 || height == 0 {
+        Err(ImageError::EmptyImage { width, height })
+    } else if width > MAX_SIDE || height > MAX_SIDE {
+        Err(ImageError::TooLarge {
+            width,
+            height,
+            max: MAX_SIDE,
+        })
+    } else {
+        Ok(())
+    }
+}
+
+/// An image of `width`×`height` filled from `pixels` (top row first); decoders guarantee that
+/// exactly `width · height` pixels follow, any shortfall would stay black.
+pub(crate) fn image_from_pixels(
+    width: usize,
+    height: usize,
+    pixels: impl IntoIterator<Item = Rgb>,
+) -> Image {
+    let mut img = Image::new(width, height);
+    for (dst, src) in img.pixels_mut().iter_mut().zip(pixels) {
+        *dst = src;
+    }
+    img
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_come_from_extensions_case_insensitively() {
+        for (name, format) in [
+            ("a.pfm", Format::Pfm),
+            ("dir.x/B.PFM", Format::Pfm),
+            ("c.Exr", Format::Exr),
+            ("/tmp/d.png", Format::Png),
+            ("e.tar.PnG", Format::Png),
+        ] {
+            assert_eq!(Format::from_path(name.as_ref()).unwrap(), format, "{name}");
+            assert!(supported_extension(name.as_ref()));
+        }
+        for name in ["a.jpg", "pfm", "a.pfm.bak", "a.", "", ".png", "dir/"] {
+            let err = Format::from_path(name.as_ref()).unwrap_err();
+            assert!(
+                matches!(err, ImageError::UnsupportedExtension { .. }),
+                "{name}"
+            );
+            assert!(!supported_extension(name.as_ref()));
+        }
+    }
+
+    #[test]
+    fn empty_images_are_not_encoded() {
+        let t = ToneMap::default();
+        for format in Format::ALL {
+            let err = format.encode(&Image::new(0, 3), &t).unwrap_err();
+            assert!(
+                matches!(
+                    err,
+                    ImageError::EmptyImage {
+                        width: 0,
+                        height: 3
+                    }
+                ),
+                "{format:?}"
+            );
+        }
+        assert!(matches!(
+            check_size(MAX_SIDE + 1, 1),
+            Err(ImageError::TooLarge { .. })
+        ));
+        assert!(check_size(MAX_SIDE, 1).is_ok());
+    }
+
+    #[test]
+    fn every_format_round_trips_in_memory() {
+        let img = Image::from_pixels(2, 1, vec![Rgb::new(0.5, 1.0, 2.0), Rgb::splat(3.0)]).unwrap();
+        for format in [Format::Pfm, Format::Exr] {
+            let bytes = format.encode(&img, &ToneMap::default()).unwrap();
+            assert_eq!(format.decode(&bytes).unwrap(), img, "{format:?}");
+        }
+        let bytes = Format::Png.encode(&img, &ToneMap::default()).unwrap();
+        let back = Format::Png.decode(&bytes).unwrap();
+        assert_eq!((back.width(), back.height()), (2, 1));
+    }
+}
