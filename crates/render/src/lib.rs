@@ -11,6 +11,7 @@ pub mod color;
 pub mod image;
 pub mod integrator;
 pub mod interaction;
+pub mod light;
 pub mod material;
 pub mod math;
 pub mod render;

@@ -154,9 +154,7 @@ mod tests {
 
     fn scene() -> Scene {
         let mut b = SceneBuilder::new();
-        let m = b.add_material(Material::Diffuse {
-            reflectance: Texture::Uniform(Rgb::WHITE),
-        });
+        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
         b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(4.0, 0.0, 0.0)))), m, None);
         b.build(AccelKind::None)
     }

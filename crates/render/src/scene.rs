@@ -5,6 +5,7 @@ use crate::accel::{Accel, AccelKind};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
+use crate::light::{AreaLight, Light};
 use crate::material::{Material, MaterialId};
 use crate::math::{Bounds3, Point3, Ray, Transform, Vec3};
 use crate::shape::{Mesh, Shape, ShapeHit, ShearedRay};
@@ -21,13 +22,20 @@ pub struct Emission {
 }
 
 impl Emission {
-    /// The radiance leaving the surface point towards `w` (unit, pointing away from the surface).
+    /// The radiance leaving the surface point of `si` towards `w` (pointing away from it).
     #[inline]
     pub fn radiance(&self, si: &SurfaceInteraction, w: Vec3) -> Rgb {
-        if !self.two_sided && si.n.dot_vec(w) <= 0.0 {
+        self.radiance_at(si.uv, si.n, w)
+    }
+
+    /// The radiance leaving the point with surface coordinates `uv` and geometric normal `n`
+    /// towards `w`.
+    #[inline]
+    pub fn radiance_at(&self, uv: crate::math::Point2, n: crate::math::Normal3, w: Vec3) -> Rgb {
+        if !self.two_sided && n.dot_vec(w) <= 0.0 {
             return Rgb::BLACK;
         }
-        self.radiance.eval(si.uv)
+        self.radiance.eval(uv)
     }
 }
 
@@ -187,11 +195,24 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Emitters, indexed by [`SurfaceProps::emission`].
     pub emissions: Vec<Emission>,
-    /// Radiance seen where rays escape the scene.
+    /// Radiance seen where rays escape the scene (besides lights at infinity).
     pub background: Rgb,
+    /// All lights, area lights included.
+    pub lights: Vec<Light>,
+    /// Indices of the lights at infinity (seen by escaping rays).
+    pub infinite_lights: Vec<u32>,
+    /// The ambient intensity I_a of the local model (sum of `ambient_light`s).
+    pub ambient: Rgb,
 }
 
 impl Scene {
+    /// The radiance arriving from direction `d` along a ray that escaped the scene.
+    pub fn escaped(&self, d: Vec3) -> Rgb {
+        self.infinite_lights
+            .iter()
+            .fold(self.background, |acc, &i| acc + self.lights[i as usize].escaped(d))
+    }
+
     /// The closest hit along `ray`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
@@ -266,6 +287,8 @@ pub struct SceneBuilder {
     materials: Vec<Material>,
     emissions: Vec<Emission>,
     background: Rgb,
+    lights: Vec<Light>,
+    ambient: Rgb,
 }
 
 impl Default for SceneBuilder {
@@ -284,7 +307,21 @@ impl SceneBuilder {
             materials: Vec::new(),
             emissions: Vec::new(),
             background: Rgb::BLACK,
+            lights: Vec::new(),
+            ambient: Rgb::BLACK,
         }
+    }
+
+    /// Adds a light (area lights come from emissive shapes instead).
+    pub fn add_light(&mut self, light: Light) -> &mut Self {
+        self.lights.push(light);
+        self
+    }
+
+    /// Adds to the local model's ambient intensity.
+    pub fn add_ambient(&mut self, i: Rgb) -> &mut Self {
+        self.ambient += i;
+        self
     }
 
     /// Sets the camera (the last call wins).
@@ -316,24 +353,42 @@ impl SceneBuilder {
         (self.emissions.len() - 1) as u32
     }
 
-    /// Adds a shape with its material and optional emission.
+    /// Adds a shape with its material and optional emission. Emissive spheres,
+    /// parallelograms, disks and boxes become area lights.
     pub fn add_shape(&mut self, shape: Shape, material: MaterialId, emission: Option<u32>) -> &mut Self {
+        let light = emission.and_then(|e| {
+            let l = match &shape {
+                Shape::Sphere(s) => AreaLight::sphere(s.clone(), e),
+                Shape::Parallelogram(p) => AreaLight::parallelogram(p.clone(), e),
+                Shape::Disk(d) => AreaLight::disk(d.clone(), e),
+                Shape::Cube(c) => AreaLight::cube(c.clone(), e),
+                _ => return None,
+            };
+            self.lights.push(Light::Area(l));
+            Some((self.lights.len() - 1) as u32)
+        });
         self.objects.push(Object {
             shape,
             props: SurfaceProps {
                 material,
                 emission,
-                light: None,
+                light,
             },
         });
         self
     }
 
     /// Adds a triangle mesh (its surface properties are in the mesh); empty meshes are dropped.
-    pub fn add_mesh(&mut self, mesh: Mesh) -> &mut Self {
-        if !mesh.is_empty() {
-            self.meshes.push(mesh);
+    /// An emissive mesh becomes an area light.
+    pub fn add_mesh(&mut self, mut mesh: Mesh) -> &mut Self {
+        if mesh.is_empty() {
+            return self;
         }
+        if let Some(e) = mesh.props.emission {
+            self.lights.push(Light::Area(AreaLight::mesh(&mesh, self.meshes.len() as u32, e)));
+            mesh.props.light = Some((self.lights.len() - 1) as u32);
+        }
+        self.meshes.push(mesh);
         self
     }
 
@@ -351,6 +406,9 @@ impl SceneBuilder {
             materials: self.materials,
             emissions: self.emissions,
             background: self.background,
+            infinite_lights: (0..self.lights.len() as u32).filter(|&i| self.lights[i as usize].is_infinite()).collect(),
+            lights: self.lights,
+            ambient: self.ambient,
         }
     }
 }
@@ -362,9 +420,7 @@ mod tests {
 
     fn two_spheres_and_a_plane() -> Scene {
         let mut b = SceneBuilder::new();
-        let m = b.add_material(Material::Diffuse {
-            reflectance: Texture::Uniform(Rgb::WHITE),
-        });
+        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
         b.add_shape(Shape::Plane(Plane::new(Transform::translation(Vec3::new(0.0, 0.0, -1.0)))), m, None);
         b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(5.0, 0.0, 0.0)))), m, None);
         b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(10.0, 0.0, 0.0)))), m, None);

@@ -28,9 +28,7 @@ pub fn direction(rng: &mut Pcg32) -> Vec3 {
 pub fn random_scene(seed: u64, n: usize, accel: AccelKind) -> Scene {
     let mut rng = Pcg32::new(seed, 17);
     let mut b = SceneBuilder::new();
-    let m = b.add_material(Material::Diffuse {
-        reflectance: Texture::Uniform(Rgb::WHITE),
-    });
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
     let mut mesh = Mesh::default();
     mesh.props.material = m;
     for i in 0..n {

@@ -46,9 +46,7 @@ fn spawned_rays_never_rehit_their_surface() {
     let mut st = RayStats::default();
     for (name, shape, curvature_radius) in shapes() {
         let mut b = SceneBuilder::new();
-        let m = b.add_material(Material::Diffuse {
-            reflectance: Texture::Uniform(Rgb::WHITE),
-        });
+        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
         let centre = shape.bounds().map(|b| b.centroid()).unwrap_or(Point3::new(3.0, -20.0, 7.0));
         let radius = shape.bounds().map(|b| b.diagonal().norm()).unwrap_or(10.0);
         b.add_shape(shape, m, None);
@@ -90,9 +88,7 @@ fn spawned_rays_never_rehit_their_surface() {
 fn closed_meshes_are_watertight() {
     let mesh = octasphere(4);
     let mut b = SceneBuilder::new();
-    let m = b.add_material(Material::Diffuse {
-        reflectance: Texture::Uniform(Rgb::WHITE),
-    });
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
     let mut mesh = mesh;
     mesh.props.material = m;
     let vertices = mesh.positions.clone();

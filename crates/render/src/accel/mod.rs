@@ -4,16 +4,31 @@
 //! what the linear list returns: each calls the one intersection routine of a primitive type
 //! ([`crate::scene::Geometry::intersect_prim`]) and breaks ties in `t` by primitive id.
 //! Unbounded primitives (planes) are kept outside and tested by the scene.
+//!
+//! The spatial subdivisions ([`KdTree`], [`Grid`], [`Octree`]) reference a primitive from every
+//! cell its box overlaps, so a hit found in one cell may lie in a later one. They stay exact by
+//! two safeguards shared here: primitive boxes are grown by a small [`margin`] before they are
+//! assigned to cells (a primitive touching a cell boundary, or lying within round-off of it,
+//! goes into both cells), and traversal continues while the next cell's entry `t` is at most
+//! [`t_limit`] of the best hit (a little beyond it), so hits at equal `t` in later cells are still
+//! tested and the tie goes to the smaller primitive id.
 
 mod bvh;
+mod grid;
+mod kdtree;
 mod list;
+mod octree;
 
 pub use bvh::{Bvh, BvhNode};
+pub use grid::Grid;
+pub use kdtree::{KdNode, KdTree};
 pub use list::List;
+pub use octree::{Octree, OctreeNode};
 
 use crate::interaction::Hit;
-use crate::math::{Bounds3, Point3, Ray};
+use crate::math::{Bounds3, Point3, Ray, Vec3};
 use crate::scene::Geometry;
+use crate::shape::ShearedRay;
 use crate::stats::RayStats;
 
 /// Which acceleration structure to build.
@@ -24,17 +39,26 @@ pub enum AccelKind {
     /// The bounding volume hierarchy (default).
     #[default]
     Bvh,
+    /// The kd-tree (SAH, pbrt-v3 style).
+    KdTree,
+    /// The uniform grid (3D-DDA).
+    Grid,
+    /// The octree.
+    Octree,
 }
 
 impl AccelKind {
     /// The command-line names, in order.
-    pub const NAMES: &'static [&'static str] = &["bvh", "none"];
+    pub const NAMES: &'static [&'static str] = &["bvh", "kdtree", "grid", "octree", "none"];
 
     /// Parses a command-line name.
     pub fn from_name(name: &str) -> Option<Self> {
         match name {
             "none" => Some(AccelKind::None),
             "bvh" => Some(AccelKind::Bvh),
+            "kdtree" => Some(AccelKind::KdTree),
+            "grid" => Some(AccelKind::Grid),
+            "octree" => Some(AccelKind::Octree),
             _ => None,
         }
     }
@@ -65,6 +89,186 @@ pub fn build_prims(geometry: &Geometry) -> Vec<BuildPrim> {
         .collect()
 }
 
+/// Relative slack of [`t_limit`].
+const T_SLACK: f32 = 1.0 / 4096.0;
+
+/// The largest cell-entry parameter that may still hold a hit at `t` or closer: `t` plus a
+/// relative slack that covers the round-off of the cell-boundary parameters.
+#[inline(always)]
+pub(crate) fn t_limit(t: f32) -> f32 {
+    t + t.abs() * T_SLACK
+}
+
+/// The margin by which the spatial subdivisions grow primitive boxes and their own bounds:
+/// 2⁻¹⁶ of the largest extent of `scene` plus 2⁻²⁰ of its largest coordinate (dozens of ULPs,
+/// so the grown box is strictly larger than the box on every axis), at least 10⁻³⁰.
+pub(crate) fn margin(scene: &Bounds3) -> f32 {
+    if scene.is_empty() {
+        return 0.0;
+    }
+    let d = scene.diagonal();
+    let ext = d.x.max(d.y).max(d.z);
+    let mag = scene.min.to_vec().abs().max(scene.max.to_vec().abs());
+    let mag = mag.x.max(mag.y).max(mag.z);
+    (ext * (1.0 / 65536.0) + mag * (1.0 / 1_048_576.0)).max(1e-30)
+}
+
+/// `b` grown by `m` on every side.
+#[inline]
+pub(crate) fn inflate(b: Bounds3, m: f32) -> Bounds3 {
+    let v = Vec3::new(m, m, m);
+    Bounds3 {
+        min: b.min - v,
+        max: b.max + v,
+    }
+}
+
+/// The parameter interval `[t0, t1]` where `ray` is inside `b`, clipped to the ray's own
+/// interval; `None` when it misses. Unlike a plain slab test it never lets `0·∞ = NaN` decide:
+/// an axis the ray is parallel to (`d = ±0`) only checks that the origin lies in the slab, and
+/// an origin exactly on a slab plane gives parameter 0 there. The far parameter grows by 2γ₃
+/// (pbrt) to cover round-off.
+#[inline]
+pub(crate) fn clip(b: &Bounds3, ray: &Ray, inv: Vec3) -> Option<(f32, f32)> {
+    let mut t0 = ray.tmin;
+    let mut t1 = ray.tmax;
+    for a in 0..3 {
+        let o = ray.o[a];
+        if ray.d[a] == 0.0 {
+            if !(o >= b.min[a] && o <= b.max[a]) {
+                return None;
+            }
+            continue;
+        }
+        let ta = if b.min[a] == o { 0.0 } else { (b.min[a] - o) * inv[a] };
+        let tb = if b.max[a] == o { 0.0 } else { (b.max[a] - o) * inv[a] };
+        let (near, far) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+        let far = far * (1.0 + 2.0 * crate::math::GAMMA3);
+        t0 = if near > t0 { near } else { t0 };
+        t1 = if far < t1 { far } else { t1 };
+    }
+    (t0 <= t1).then_some((t0, t1))
+}
+
+/// The reciprocal of each component of `d`.
+#[inline]
+pub(crate) fn inv_dir(d: Vec3) -> Vec3 {
+    Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z)
+}
+
+/// What a spatial subdivision does with the primitive list of each cell (leaf) it visits,
+/// front to back.
+pub(crate) trait CellVisitor {
+    /// Tests the primitives of a cell; false to stop the traversal.
+    fn cell(&mut self, prims: &[u32]) -> bool;
+    /// The largest entry parameter of a cell still worth visiting.
+    fn limit(&self) -> f32;
+}
+
+/// Closest-hit queries: keeps the best hit, shortens the ray to one ULP past it (so ties at the
+/// same `t` are still tested and go to the smaller id), and asks for cells entered up to
+/// [`t_limit`] of it.
+pub(crate) struct ClosestVisitor<'a> {
+    geometry: &'a Geometry,
+    sr: ShearedRay,
+    ray: Ray,
+    best: Option<Hit>,
+    tests: u64,
+}
+
+impl<'a> ClosestVisitor<'a> {
+    #[inline(always)]
+    pub(crate) fn new(geometry: &'a Geometry, ray: &Ray) -> Self {
+        Self {
+            geometry,
+            sr: ShearedRay::new(ray),
+            ray: *ray,
+            best: None,
+            tests: 0,
+        }
+    }
+
+    /// The best hit, with the counters added to `stats`.
+    #[inline(always)]
+    pub(crate) fn finish(self, visited: u64, stats: &mut RayStats) -> Option<Hit> {
+        stats.nodes += visited;
+        stats.prim_tests += self.tests;
+        self.best
+    }
+}
+
+impl CellVisitor for ClosestVisitor<'_> {
+    #[inline(always)]
+    fn cell(&mut self, prims: &[u32]) -> bool {
+        for &id in prims {
+            self.tests += 1;
+            if let Some(h) = self.geometry.intersect_prim(id, &self.ray, &self.sr) {
+                if closest(&mut self.best, h) {
+                    self.ray.tmax = h.t.next_up();
+                }
+            }
+        }
+        true
+    }
+
+    #[inline(always)]
+    fn limit(&self) -> f32 {
+        match &self.best {
+            Some(b) => t_limit(b.t),
+            None => f32::INFINITY,
+        }
+    }
+}
+
+/// Any-hit queries: stops at the first hit.
+pub(crate) struct AnyVisitor<'a> {
+    geometry: &'a Geometry,
+    sr: ShearedRay,
+    ray: &'a Ray,
+    found: bool,
+    tests: u64,
+}
+
+impl<'a> AnyVisitor<'a> {
+    #[inline(always)]
+    pub(crate) fn new(geometry: &'a Geometry, ray: &'a Ray) -> Self {
+        Self {
+            geometry,
+            sr: ShearedRay::new(ray),
+            ray,
+            found: false,
+            tests: 0,
+        }
+    }
+
+    /// Whether anything was hit, with the counters added to `stats`.
+    #[inline(always)]
+    pub(crate) fn finish(self, visited: u64, stats: &mut RayStats) -> bool {
+        stats.nodes += visited;
+        stats.prim_tests += self.tests;
+        self.found
+    }
+}
+
+impl CellVisitor for AnyVisitor<'_> {
+    #[inline(always)]
+    fn cell(&mut self, prims: &[u32]) -> bool {
+        for &id in prims {
+            self.tests += 1;
+            if self.geometry.intersect_prim(id, self.ray, &self.sr).is_some() {
+                self.found = true;
+                return false;
+            }
+        }
+        true
+    }
+
+    #[inline(always)]
+    fn limit(&self) -> f32 {
+        f32::INFINITY
+    }
+}
+
 /// Keeps `h` in `best` when it is closer (ties to the smaller id); true when it was kept.
 #[inline]
 pub(crate) fn closest(best: &mut Option<Hit>, h: Hit) -> bool {
@@ -83,6 +287,12 @@ pub enum Accel {
     List(List),
     /// The BVH.
     Bvh(Bvh),
+    /// The kd-tree.
+    KdTree(KdTree),
+    /// The uniform grid.
+    Grid(Grid),
+    /// The octree.
+    Octree(Octree),
 }
 
 impl Accel {
@@ -91,6 +301,9 @@ impl Accel {
         match kind {
             AccelKind::None => Accel::List(List::new(geometry)),
             AccelKind::Bvh => Accel::Bvh(Bvh::build(build_prims(geometry))),
+            AccelKind::KdTree => Accel::KdTree(KdTree::build(&build_prims(geometry))),
+            AccelKind::Grid => Accel::Grid(Grid::build(&build_prims(geometry))),
+            AccelKind::Octree => Accel::Octree(Octree::build(&build_prims(geometry))),
         }
     }
 
@@ -100,6 +313,9 @@ impl Accel {
         match self {
             Accel::List(l) => l.intersect(geometry, ray, stats),
             Accel::Bvh(b) => b.intersect(geometry, ray, stats),
+            Accel::KdTree(k) => k.intersect(geometry, ray, stats),
+            Accel::Grid(g) => g.intersect(geometry, ray, stats),
+            Accel::Octree(o) => o.intersect(geometry, ray, stats),
         }
     }
 
@@ -109,6 +325,122 @@ impl Accel {
         match self {
             Accel::List(l) => l.occluded(geometry, ray, stats),
             Accel::Bvh(b) => b.occluded(geometry, ray, stats),
+            Accel::KdTree(k) => k.occluded(geometry, ray, stats),
+            Accel::Grid(g) => g.occluded(geometry, ray, stats),
+            Accel::Octree(o) => o.occluded(geometry, ray, stats),
+        }
+    }
+}
+
+/// Small hand-made geometries and the comparison with the list shared by the unit tests of
+/// the structures.
+#[cfg(test)]
+pub(crate) mod test_scenes {
+    use super::List;
+    use crate::interaction::{Hit, SurfaceProps};
+    use crate::math::{Point3, Ray, Transform, Vec3};
+    use crate::sampling::Pcg32;
+    use crate::scene::{Geometry, Object};
+    use crate::shape::{Mesh, Parallelogram, Shape, Sphere};
+    use crate::stats::RayStats;
+
+    /// One mesh of the given triangles (ids in order).
+    pub fn triangles(tris: &[[Point3; 3]]) -> Geometry {
+        let mut mesh = Mesh::default();
+        for t in tris {
+            let k = mesh.positions.len() as u32;
+            mesh.positions.extend_from_slice(t);
+            mesh.indices.push([k, k + 1, k + 2]);
+        }
+        let meshes = if mesh.is_empty() { Vec::new() } else { vec![mesh] };
+        Geometry::new(Vec::new(), meshes)
+    }
+
+    /// Flat parallelograms (zero thickness on an axis, some on cell-like boundaries, one
+    /// duplicated) and a few spheres: the wall at x = 4 spans y, z in [-2, 2].
+    pub fn parallelogram_scene() -> Geometry {
+        let obj = |shape| Object {
+            shape,
+            props: SurfaceProps::new(0),
+        };
+        let pg = |p: Point3, v: Vec3, w: Vec3| obj(Shape::Parallelogram(Parallelogram::new(p, v, w).unwrap()));
+        let sphere = |c: Vec3, r: f32| obj(Shape::Sphere(Sphere::new(Transform::translation(c) * Transform::scaling(Vec3::new(r, r, r)))));
+        let objects = vec![
+            pg(Point3::new(4.0, -2.0, -2.0), Vec3::new(0.0, 4.0, 0.0), Vec3::new(0.0, 0.0, 4.0)),
+            pg(Point3::new(-4.0, -4.0, 0.0), Vec3::new(8.0, 0.0, 0.0), Vec3::new(0.0, 8.0, 0.0)),
+            pg(Point3::new(-4.0, 0.0, -4.0), Vec3::new(8.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 8.0)),
+            pg(Point3::new(-4.0, 0.0, -4.0), Vec3::new(8.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 8.0)),
+            pg(Point3::new(-1.0, -1.0, 1.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)),
+            sphere(Vec3::new(2.0, 2.0, 2.0), 0.5),
+            sphere(Vec3::new(-2.0, -2.0, -2.0), 1.5),
+            sphere(Vec3::new(-2.0, -2.0, -2.0), 1.5),
+            sphere(Vec3::new(0.0, 0.0, 0.0), 0.25),
+        ];
+        Geometry::new(objects, Vec::new())
+    }
+
+    /// Compares `intersect` and `occluded` with the list on many rays: random, along the axes
+    /// from points on a lattice (through edges, vertices and flat primitives), and aimed at
+    /// the corners of the primitives' boxes.
+    pub fn check_against_list(
+        g: &Geometry,
+        intersect: impl Fn(&Geometry, &Ray, &mut RayStats) -> Option<Hit>,
+        occluded: impl Fn(&Geometry, &Ray, &mut RayStats) -> bool,
+    ) {
+        let list = List::new(g);
+        let b = g.bounds();
+        let (c, r) = if b.is_empty() {
+            (Point3::ORIGIN, 1.0)
+        } else {
+            let d = b.diagonal();
+            (b.centroid(), d.x.max(d.y).max(d.z).max(1.0))
+        };
+        let mut rng = Pcg32::new(7, 3);
+        let mut pt = |s: f32| c + Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * (2.0 * s * r);
+        let mut rays = Vec::new();
+        for i in 0..3000 {
+            let o = pt(if i % 3 == 0 { 0.4 } else { 1.5 });
+            let target = pt(0.5);
+            let mut ray = Ray::new(o, target - o);
+            if i % 7 == 0 {
+                ray.tmax = 0.7;
+            }
+            rays.push(ray);
+        }
+        for ix in -8..=8 {
+            for iy in -8..=8 {
+                let (u, v) = (ix as f32 * 0.5, iy as f32 * 0.5);
+                for (o, d) in [
+                    (Point3::new(u, v, -30.0), Vec3::Z),
+                    (Point3::new(u, v, 30.0), -Vec3::Z),
+                    (Point3::new(-30.0, u, v), Vec3::X),
+                    (Point3::new(30.0, u, v), -Vec3::X),
+                    (Point3::new(u, -30.0, v), Vec3::Y),
+                    (Point3::new(u, 30.0, v), -Vec3::Y),
+                    (Point3::new(u, v, 0.0), Vec3::new(1.0, 1.0, 0.0)),
+                ] {
+                    rays.push(Ray::new(c + o.to_vec(), d));
+                }
+            }
+        }
+        for id in 0..g.bounded_count() {
+            let pb = g.prim_bounds(id);
+            for k in 0..8 {
+                let corner = Point3::new(
+                    if k & 1 == 0 { pb.min.x } else { pb.max.x },
+                    if k & 2 == 0 { pb.min.y } else { pb.max.y },
+                    if k & 4 == 0 { pb.min.z } else { pb.max.z },
+                );
+                let o = pt(1.5);
+                rays.push(Ray::new(o, corner - o));
+            }
+        }
+        let mut st = RayStats::default();
+        for ray in &rays {
+            let a = list.intersect(g, ray, &mut st);
+            let h = intersect(g, ray, &mut st);
+            assert_eq!(a, h, "{ray:?}");
+            assert_eq!(list.occluded(g, ray, &mut st), occluded(g, ray, &mut st), "{ray:?}");
         }
     }
 }

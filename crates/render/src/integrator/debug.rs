@@ -74,9 +74,7 @@ mod tests {
 
     fn one_sphere() -> Scene {
         let mut b = SceneBuilder::new();
-        let m = b.add_material(Material::Diffuse {
-            reflectance: Texture::Uniform(Rgb::new(0.5, 0.25, 0.0)),
-        });
+        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::new(0.5, 0.25, 0.0))));
         let e = b.add_emission(Emission {
             radiance: Texture::Uniform(Rgb::new(0.0, 0.0, 1.0)),
             two_sided: true,

@@ -4,8 +4,14 @@
 //! calls per ray (shapes, materials, lights) is a closed enum.
 
 mod debug;
+mod local;
+mod path;
+mod whitted;
 
 pub use debug::{Depth, Flat, Normals, OnOff};
+pub use local::{shade, Direct, Local};
+pub use path::{CoursePath, Path};
+pub use whitted::Whitted;
 
 use crate::color::Rgb;
 use crate::math::Ray;
@@ -69,13 +75,39 @@ impl IntegratorKind {
     }
 
     /// The integrator for `scene`, or why it cannot be built.
-    pub fn build(self, _scene: &Scene, _settings: &IntegratorSettings) -> Result<Box<dyn Integrator>, String> {
+    pub fn build(self, _scene: &Scene, settings: &IntegratorSettings) -> Result<Box<dyn Integrator>, String> {
         match self {
             IntegratorKind::OnOff => Ok(Box::new(OnOff)),
             IntegratorKind::Flat => Ok(Box::new(Flat)),
             IntegratorKind::Normals => Ok(Box::new(Normals)),
             IntegratorKind::Depth => Ok(Box::new(Depth)),
-            _ => Err("not supported yet".to_string()),
+            IntegratorKind::Local => Ok(Box::new(Local)),
+            IntegratorKind::Direct => Ok(Box::new(Direct)),
+            IntegratorKind::Whitted => Ok(Box::new(Whitted {
+                max_depth: match settings.max_depth {
+                    None => 10,
+                    Some(d) if d < 0 => 10_000,
+                    Some(d) => d as u32,
+                },
+            })),
+            IntegratorKind::Path => {
+                let max_depth = settings.max_depth.filter(|&d| d >= 0).map(|d| d as u32);
+                let rr_depth = settings.rr_depth.unwrap_or(5);
+                Ok(if settings.num_of_rays > 1 {
+                    Box::new(CoursePath {
+                        num_of_rays: settings.num_of_rays,
+                        max_depth,
+                        rr_depth,
+                    })
+                } else {
+                    Box::new(Path {
+                        max_depth,
+                        rr_depth,
+                        hide_emitters: settings.hide_emitters,
+                    })
+                })
+            }
+            IntegratorKind::Radiosity => Err("not supported yet".to_string()),
         }
     }
 }

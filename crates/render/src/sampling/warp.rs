@@ -102,10 +102,12 @@ pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
     if f.is_infinite() {
         return 1.0;
     }
-    if f == 0.0 {
+    if !(f > 0.0) {
         return 0.0;
     }
-    (f * f) / (f * f + g * g)
+    // f²/(f² + g²) written so that huge densities cannot overflow.
+    let r = g / f;
+    1.0 / (1.0 + r * r)
 }
 
 #[cfg(test)]
@@ -149,5 +151,8 @@ mod tests {
         assert!((w1 + w2 - 1.0).abs() < 1e-6);
         assert_eq!(power_heuristic(1.0, f32::INFINITY, 1.0, 3.0), 1.0);
         assert_eq!(power_heuristic(1.0, 0.0, 1.0, 3.0), 0.0);
+        // Densities whose squares overflow f32 still give a weight.
+        assert!((power_heuristic(1.0, 2e21, 1.0, 1.0) - 1.0).abs() < 1e-6);
+        assert!(power_heuristic(1.0, 1.0, 1.0, 2e21) < 1e-6);
     }
 }

@@ -69,12 +69,18 @@ impl Cube {
     /// The surface where the ray crosses `face` at `t`.
     pub fn geometry(&self, ray: &Ray, t: f32, face: u32) -> LocalGeometry {
         let w = &self.world_from_object;
-        let mut q = w.inv_point(ray.o) + w.inv_vector(ray.d) * t;
+        let q = w.inv_point(ray.o) + w.inv_vector(ray.d) * t;
+        self.surface(face, q)
+    }
+
+    /// The surface of `face` at the object-space point `q` (snapped onto the face).
+    pub fn surface(&self, face: u32, q: Point3) -> LocalGeometry {
+        let w = &self.world_from_object;
         let axis = (face / 2) as usize;
         let sign = if face % 2 == 1 { 1.0 } else { -1.0 };
         // Snap onto the face and keep the other coordinates on the cube.
         let clamp = |x: f32| x.clamp(-1.0, 1.0);
-        q = Point3::new(clamp(q.x), clamp(q.y), clamp(q.z));
+        let mut q = Point3::new(clamp(q.x), clamp(q.y), clamp(q.z));
         let mut n = Vec3::ZERO;
         match axis {
             0 => {
@@ -102,6 +108,24 @@ impl Cube {
             ns: nw,
             uv: Point2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5),
             dpdu: w.vector(tangent * 2.0),
+        }
+    }
+
+    /// The world-space area of each face (faces `2·axis + side`).
+    pub fn face_areas(&self) -> [f32; 6] {
+        let w = &self.world_from_object;
+        let (ex, ey, ez) = (w.vector(Vec3::X * 2.0), w.vector(Vec3::Y * 2.0), w.vector(Vec3::Z * 2.0));
+        let (ax, ay, az) = (ey.cross(ez).norm(), ex.cross(ez).norm(), ex.cross(ey).norm());
+        [ax, ax, ay, ay, az, az]
+    }
+
+    /// The object-space point of `face` at face coordinates (a, b) ∈ [-1, 1]².
+    pub fn face_point(face: u32, a: f32, b: f32) -> Point3 {
+        let s = if face % 2 == 1 { 1.0 } else { -1.0 };
+        match face / 2 {
+            0 => Point3::new(s, a, b),
+            1 => Point3::new(a, s, b),
+            _ => Point3::new(a, b, s),
         }
     }
 

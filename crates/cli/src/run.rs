@@ -1,0 +1,145 @@
+//! `candela demo` and `candela render`: load, validate options, render, write.
+
+use crate::args::{RenderArgs, SceneArgs, ToneArgs};
+use anyhow::{bail, Context, Result};
+use candela_imageio::{Encoding, ToneMap};
+use candela_render::accel::AccelKind;
+use candela_render::integrator::{IntegratorKind, IntegratorSettings};
+use candela_render::render::{render as render_image, RenderSettings};
+use candela_scene::{LoadOptions, LoadedScene};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// `candela demo`.
+pub fn demo(args: RenderArgs) -> Result<()> {
+    let outputs = outputs(&args, Path::new("demo.png"))?;
+    let opts = load_options(&args)?;
+    let loaded = candela_scene::demo_scene(&opts).context("building the demo scene")?;
+    render_and_write(loaded, &args, &outputs)
+}
+
+/// `candela render SCENE`.
+pub fn render(a: SceneArgs) -> Result<()> {
+    let default_out = PathBuf::from(a.scene.file_stem().unwrap_or_default()).with_extension("png");
+    let outputs = outputs(&a.render, &default_out)?;
+    let opts = load_options(&a.render)?;
+    // Scene errors carry their own `file:line:col`; print them as they are.
+    let loaded = candela_scene::load_scene(&a.scene, &opts).map_err(|e| anyhow::anyhow!("{e}"))?;
+    render_and_write(loaded, &a.render, &outputs)
+}
+
+/// The output files, checked before any work so that a bad extension costs nothing.
+fn outputs(args: &RenderArgs, default: &Path) -> Result<Vec<PathBuf>> {
+    let outs = if args.outputs.is_empty() { vec![default.to_path_buf()] } else { args.outputs.clone() };
+    for o in &outs {
+        if !candela_imageio::supported_extension(o) {
+            bail!("--output '{}': unknown image format (use .png, .pfm or .exr)", o.display());
+        }
+    }
+    Ok(outs)
+}
+
+/// Everything the scene loaders need from the command line.
+fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
+    let accel = match &args.accel {
+        None => AccelKind::default(),
+        Some(name) => AccelKind::from_name(name).with_context(|| {
+            format!("--accel '{name}': unknown acceleration structure (expected one of: {})", AccelKind::NAMES.join(", "))
+        })?,
+    };
+    let mut defines = Vec::new();
+    for d in &args.defines {
+        let (name, value) = d
+            .split_once('=')
+            .or_else(|| d.split_once(':'))
+            .with_context(|| format!("--define '{d}': expected NAME=VALUE or NAME:VALUE"))?;
+        if name.trim().is_empty() {
+            bail!("--define '{d}': the name is empty");
+        }
+        defines.push((name.trim().to_string(), value.trim().to_string()));
+    }
+    Ok(LoadOptions { defines, accel })
+}
+
+/// Builds the tone mapping for LDR outputs.
+pub fn tone_map(t: &ToneArgs) -> ToneMap {
+    ToneMap {
+        factor: t.factor,
+        luminosity: t.luminosity,
+        encoding: if t.srgb { Encoding::Srgb } else { Encoding::Gamma(t.gamma) },
+    }
+}
+
+fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf]) -> Result<()> {
+    for w in &loaded.warnings {
+        eprintln!("candela: warning: {w}");
+    }
+    let hints = &loaded.hints;
+    let name = args.integrator.as_deref().or(hints.integrator.as_deref()).unwrap_or("flat");
+    let kind = IntegratorKind::from_name(name).with_context(|| {
+        format!("--integrator '{name}': unknown integrator (expected one of: {})", IntegratorKind::NAMES.join(", "))
+    })?;
+    let integrator_settings = IntegratorSettings {
+        max_depth: args.max_depth.or(hints.max_depth),
+        num_of_rays: args.num_of_rays.unwrap_or(1),
+        rr_depth: hints.rr_depth,
+        hide_emitters: hints.hide_emitters,
+    };
+    let integrator = kind
+        .build(&loaded.scene, &integrator_settings)
+        .map_err(|e| anyhow::anyhow!("--integrator '{name}': {e}"))?;
+
+    let settings = RenderSettings {
+        width: args.width.or(hints.width).unwrap_or(640) as usize,
+        height: args.height.or(hints.height).unwrap_or(480) as usize,
+        spp: args.spp.or(hints.spp).unwrap_or(1),
+        seed: args.seed,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0) as usize)
+        .build()
+        .context("--threads: cannot start the worker threads")?;
+
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new((settings.width * settings.height) as u64);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent}% ETA {eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    };
+    let start = Instant::now();
+    let out = pool.install(|| render_image(&loaded.scene, integrator.as_ref(), &settings, &|n| bar.inc(n)));
+    let seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+
+    let tone = tone_map(&args.tone);
+    for path in outputs {
+        candela_imageio::write_image(path, &out.image, &tone).with_context(|| format!("writing '{}'", path.display()))?;
+    }
+    if args.stats {
+        let s = &out.stats;
+        let rays = s.total_rays();
+        eprintln!(
+            "{}x{} at {} spp with {} ({} threads): {:.3} s, {} rays ({} camera/bounce + {} shadow), {:.3} Mrays/s, {:.3} Msamples/s, {:.1} nodes and {:.1} primitive tests per ray, {} samples rejected (NaN/Inf)",
+            settings.width,
+            settings.height,
+            settings.spp,
+            name,
+            pool.current_num_threads(),
+            seconds,
+            rays,
+            s.rays,
+            s.shadow_rays,
+            rays as f64 / seconds / 1e6,
+            s.samples as f64 / seconds / 1e6,
+            s.nodes as f64 / rays.max(1) as f64,
+            s.prim_tests as f64 / rays.max(1) as f64,
+            s.rejected_samples
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,231 @@
+//! Lights: point, spot, distant, hemisphere, environment and area lights.
+//!
+//! Two interfaces serve the two families of integrators:
+//! - the local model of the lectures (`local`, `direct`, `whitted`) asks a light for the
+//!   direction and the ambient, diffuse and specular intensities it delivers at a point
+//!   ([`Light::local`]); each light may carry separate intensities
+//!   (`components(<Ia>, <Id>, <Is>)`, default I_a = 0, I_d = I_s = I);
+//! - the path tracer samples lights ([`Light::sample`]) and asks for the density of a direction
+//!   found by BSDF sampling ([`Light::pdf_hit`], [`Light::pdf_escape`]) for multiple importance
+//!   sampling.
+
+mod area;
+mod infinite;
+mod point;
+
+pub use area::{AreaLight, AreaShape};
+pub use infinite::{Environment, HemisphereLight};
+pub use point::{Falloff, PointLight, SpotLight, SpotProfile};
+
+use crate::color::Rgb;
+use crate::math::{Normal3, Point3, Vec3};
+use crate::scene::{Emission, Geometry};
+
+/// The lecture's separate ambient, diffuse and specular intensities of a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Components {
+    /// I_a.
+    pub ambient: Rgb,
+    /// I_d.
+    pub diffuse: Rgb,
+    /// I_s.
+    pub specular: Rgb,
+}
+
+impl Components {
+    /// The default split of an intensity: I_a = 0, I_d = I_s = I.
+    pub fn from_intensity(i: Rgb) -> Self {
+        Self {
+            ambient: Rgb::BLACK,
+            diffuse: i,
+            specular: i,
+        }
+    }
+}
+
+/// Parallel light travelling along `direction`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DistantLight {
+    /// Unit direction of travel.
+    pub direction: Vec3,
+    /// Irradiance on a surface facing the light.
+    pub irradiance: Rgb,
+}
+
+/// The closed set of lights.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Light {
+    /// A point light.
+    Point(PointLight, Components),
+    /// A spot light.
+    Spot(SpotLight, Components),
+    /// A distant light.
+    Distant(DistantLight, Components),
+    /// A hemisphere light.
+    Hemisphere(HemisphereLight, Components),
+    /// An environment (constant or image).
+    Environment(Environment),
+    /// An emissive shape.
+    Area(AreaLight),
+}
+
+/// Where a shadow ray for a light sample must go.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Target {
+    /// A point in space (point and spot lights).
+    Point(Point3),
+    /// A point on a surface with its normal (area lights).
+    Surface(Point3, Normal3),
+    /// Infinitely far along the sampled direction.
+    Infinite,
+}
+
+/// A sampled light direction as seen from a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// Unit direction from the point to the light.
+    pub wi: Vec3,
+    /// Radiance arriving along `wi` (for delta lights: intensity × fall-off, or irradiance).
+    pub li: Rgb,
+    /// Density per unit solid angle (1 for delta lights).
+    pub pdf: f32,
+    /// The light is a Dirac delta (point, spot, distant): no MIS.
+    pub delta: bool,
+    /// Where the shadow ray goes.
+    pub target: Target,
+}
+
+/// What the local model receives from one light at a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalIllumination {
+    /// Unit direction to the light.
+    pub wi: Vec3,
+    /// Where a shadow ray must go.
+    pub target: Target,
+    /// I_a (fall-off applied).
+    pub ambient: Rgb,
+    /// I_d (fall-off applied).
+    pub diffuse: Rgb,
+    /// I_s (fall-off applied).
+    pub specular: Rgb,
+}
+
+impl Light {
+    /// True for lights at infinity, which escaping rays see.
+    pub fn is_infinite(&self) -> bool {
+        matches!(self, Light::Environment(_) | Light::Hemisphere(..))
+    }
+
+    /// The local model's illumination at `p` from a point, spot or distant light (`None` for
+    /// other lights, or outside a spot's cone).
+    pub fn local(&self, p: Point3) -> Option<LocalIllumination> {
+        let (wi, target, scale, c) = match self {
+            Light::Point(l, c) => {
+                let to = l.position - p;
+                let d = to.norm();
+                (to / d, Target::Point(l.position), l.falloff.scale(d), c)
+            }
+            Light::Spot(l, c) => {
+                let to = l.position - p;
+                let d = to.norm();
+                let wi = to / d;
+                (wi, Target::Point(l.position), l.falloff.scale(d) * l.profile(-wi), c)
+            }
+            Light::Distant(l, c) => (-l.direction, Target::Infinite, 1.0, c),
+            _ => return None,
+        };
+        (scale > 0.0 && wi.is_finite()).then_some(LocalIllumination {
+            wi,
+            target,
+            ambient: c.ambient * scale,
+            diffuse: c.diffuse * scale,
+            specular: c.specular * scale,
+        })
+    }
+
+    /// Samples the light as seen from `p` for the path tracer.
+    pub fn sample(&self, geometry: &Geometry, emissions: &[Emission], p: Point3, u: [f32; 2]) -> Option<LightSample> {
+        let s = match self {
+            Light::Point(l, _) => {
+                let to = l.position - p;
+                let d = to.norm();
+                LightSample {
+                    wi: to / d,
+                    li: l.intensity * l.falloff.scale(d),
+                    pdf: 1.0,
+                    delta: true,
+                    target: Target::Point(l.position),
+                }
+            }
+            Light::Spot(l, _) => {
+                let to = l.position - p;
+                let d = to.norm();
+                let wi = to / d;
+                LightSample {
+                    wi,
+                    li: l.intensity * (l.falloff.scale(d) * l.profile(-wi)),
+                    pdf: 1.0,
+                    delta: true,
+                    target: Target::Point(l.position),
+                }
+            }
+            Light::Distant(l, _) => LightSample {
+                wi: -l.direction,
+                li: l.irradiance,
+                pdf: 1.0,
+                delta: true,
+                target: Target::Infinite,
+            },
+            Light::Hemisphere(h, _) => {
+                let (wi, pdf) = h.sample(u);
+                LightSample {
+                    wi,
+                    li: h.radiance,
+                    pdf,
+                    delta: false,
+                    target: Target::Infinite,
+                }
+            }
+            Light::Environment(e) => {
+                let (wi, li, pdf) = e.sample(u)?;
+                LightSample {
+                    wi,
+                    li,
+                    pdf,
+                    delta: false,
+                    target: Target::Infinite,
+                }
+            }
+            Light::Area(a) => a.sample(geometry, emissions, p, u)?,
+        };
+        (s.pdf > 0.0 && s.wi.is_finite() && !s.li.is_black()).then_some(s)
+    }
+
+    /// The solid-angle density of sampling the point `q` (normal `n`) of this area light from
+    /// `p` (0 for other lights).
+    pub fn pdf_hit(&self, p: Point3, q: Point3, n: Normal3) -> f32 {
+        match self {
+            Light::Area(a) => a.pdf(p, q, n),
+            _ => 0.0,
+        }
+    }
+
+    /// Radiance reaching the scene from direction `d` (pointing away from the scene) for
+    /// lights at infinity, black for the others.
+    pub fn escaped(&self, d: Vec3) -> Rgb {
+        match self {
+            Light::Environment(e) => e.radiance(d),
+            Light::Hemisphere(h, _) => h.radiance(d),
+            _ => Rgb::BLACK,
+        }
+    }
+
+    /// The solid-angle density of sampling direction `d` of a light at infinity.
+    pub fn pdf_escape(&self, d: Vec3) -> f32 {
+        match self {
+            Light::Environment(e) => e.pdf(d),
+            Light::Hemisphere(h, _) => h.pdf(d),
+            _ => 0.0,
+        }
+    }
+}

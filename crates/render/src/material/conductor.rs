@@ -1,0 +1,74 @@
+//! Rough conductors: the microfacet reflection F·D·G / (4 cos θo cos θi) with the conductor
+//! Fresnel term (Mitsuba `roughconductor`: `distribution` (beckmann), `alpha` (0.1), `eta`, `k`
+//! or `material`, `specular_reflectance`). With a dielectric Fresnel term and a diffuse base, the
+//! same lobe gives the Cook–Torrance model (see `cook_torrance.rs`).
+
+use super::fresnel::{fresnel_conductor, reflect};
+use super::microfacet::Microfacet;
+use super::LocalSample;
+use crate::color::Rgb;
+use crate::math::Vec3;
+
+/// The Fresnel term of a conductor, or 1 for the ideal (`material="none"`) one.
+#[inline]
+pub fn conductor_fresnel(c: Option<(Rgb, Rgb)>, cos: f32) -> Rgb {
+    match c {
+        Some((eta, k)) => fresnel_conductor(cos, eta, k),
+        None => Rgb::WHITE,
+    }
+}
+
+/// D·G / (4 cos θo) for the pair (the specular lobe without Fresnel, cosine of wi included), and
+/// the half vector.
+#[inline]
+pub fn microfacet_lobe(mf: &Microfacet, wo: Vec3, wi: Vec3) -> Option<(f32, Vec3)> {
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return None;
+    }
+    let h = (wo + wi).normalize();
+    let v = mf.d(h) * mf.g(wo, wi, h) / (4.0 * wo.z);
+    (v > 0.0 && v.is_finite()).then_some((v, h))
+}
+
+/// The density of reflecting about a sampled microfacet normal: p(m) / (4 |wo·m|).
+#[inline]
+pub fn microfacet_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> f32 {
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return 0.0;
+    }
+    let h = (wo + wi).normalize();
+    let d = wo.dot(h);
+    if d <= 0.0 {
+        return 0.0;
+    }
+    mf.pdf(wo, h) / (4.0 * d)
+}
+
+/// f·cos θi.
+pub fn eval(mf: &Microfacet, c: Option<(Rgb, Rgb)>, r: Rgb, wo: Vec3, wi: Vec3) -> Rgb {
+    match microfacet_lobe(mf, wo, wi) {
+        Some((v, h)) => r * conductor_fresnel(c, wo.dot(h)) * v,
+        None => Rgb::BLACK,
+    }
+}
+
+/// Samples a microfacet normal and reflects about it.
+pub fn sample(mf: &Microfacet, c: Option<(Rgb, Rgb)>, r: Rgb, wo: Vec3, u: [f32; 2]) -> Option<LocalSample> {
+    if wo.z <= 0.0 {
+        return None;
+    }
+    let m = mf.sample(wo, u);
+    let wi = reflect(wo, m);
+    let pdf = microfacet_pdf(mf, wo, wi);
+    if !(pdf > 0.0) || wi.z <= 0.0 {
+        return None;
+    }
+    let value = eval(mf, c, r, wo, wi);
+    Some(LocalSample {
+        wi,
+        weight: value / pdf,
+        pdf,
+        delta: false,
+        eta: 1.0,
+    })
+}

@@ -1,0 +1,240 @@
+//! Plastic: a diffuse base under a dielectric coating (Mitsuba `plastic` and `roughplastic`).
+//!
+//! Parameters: `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior` (1.49,
+//! polypropylene), `ext_ior` (1.000277, air), `nonlinear` (false); rough: `distribution`
+//! (beckmann), `alpha` (0.1).
+//!
+//! Light is reflected specularly by the coating with probability F, or enters it, scatters
+//! diffusely at the base (with the internal reflections summed in closed form) and leaves:
+//! f_diffuse = ρ / (1 − Fdr_int) · (1 − F(θi))(1 − F(θo)) / (π η²) (with `nonlinear`,
+//! ρ·Fdr_int replaces Fdr_int). The rough version takes the transmittances from a table of the
+//! rough coating's directional albedo, computed once per material.
+
+use super::conductor::{microfacet_lobe, microfacet_pdf};
+use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance, reflect, reflect_z};
+use super::microfacet::Microfacet;
+use super::LocalSample;
+use crate::color::Rgb;
+use crate::math::{Vec3, INV_PI};
+use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+
+/// The diffuse base's effective reflectance after the internal reflections.
+#[inline]
+fn base(kd: Rgb, fdr_int: f32, nonlinear: bool) -> Rgb {
+    if nonlinear {
+        kd.map(|c| c / (1.0 - c * fdr_int))
+    } else {
+        kd / (1.0 - fdr_int)
+    }
+}
+
+/// Parameters of a smooth plastic at one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plastic {
+    /// Diffuse reflectance of the base.
+    pub kd: Rgb,
+    /// Specular reflectance of the coating.
+    pub ks: Rgb,
+    /// Relative index of the coating.
+    pub eta: f32,
+    /// Use the colour-dependent internal reflection term.
+    pub nonlinear: bool,
+}
+
+impl Plastic {
+    fn specular_probability(&self, f_i: f32) -> f32 {
+        let (d, s) = (self.kd.average(), self.ks.average());
+        let w = if d + s > 0.0 { s / (d + s) } else { 0.5 };
+        let ps = f_i * w;
+        let pd = (1.0 - f_i) * (1.0 - w);
+        if ps + pd > 0.0 {
+            ps / (ps + pd)
+        } else {
+            0.0
+        }
+    }
+
+    /// f·cos θi of the diffuse part (the specular part is a delta).
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Rgb::BLACK;
+        }
+        let f_i = fresnel_dielectric(wo.z, self.eta).0;
+        let f_o = fresnel_dielectric(wi.z, self.eta).0;
+        let fdr = fresnel_diffuse_reflectance(1.0 / self.eta);
+        base(self.kd, fdr, self.nonlinear) * (INV_PI * wi.z * (1.0 - f_i) * (1.0 - f_o) / (self.eta * self.eta))
+    }
+
+    /// The density of sampling the diffuse part.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let ps = self.specular_probability(fresnel_dielectric(wo.z, self.eta).0);
+        (1.0 - ps) * cosine_hemisphere_pdf(wi.z)
+    }
+
+    /// Picks the coating's mirror reflection or the diffuse base.
+    pub fn sample(&self, wo: Vec3, u1: f32, u2: [f32; 2]) -> Option<LocalSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let f_i = fresnel_dielectric(wo.z, self.eta).0;
+        let ps = self.specular_probability(f_i);
+        if u1 < ps {
+            return Some(LocalSample {
+                wi: reflect_z(wo),
+                weight: self.ks * (f_i / ps),
+                pdf: ps,
+                delta: true,
+                eta: 1.0,
+            });
+        }
+        let wi = square_to_cosine_hemisphere(u2);
+        let pdf = (1.0 - ps) * cosine_hemisphere_pdf(wi.z);
+        if !(pdf > 0.0) {
+            return None;
+        }
+        Some(LocalSample {
+            wi,
+            weight: self.eval(wo, wi) / pdf,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
+    }
+}
+
+/// Entries of the rough coating's transmittance table over cos θ ∈ [0, 1].
+pub const TABLE: usize = 64;
+
+/// The precomputed part of a rough plastic: the coating's transmittance per cos θ and its
+/// internal diffuse reflectance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughCoating {
+    /// The microfacet distribution of the coating.
+    pub mf: Microfacet,
+    /// Relative index of the coating.
+    pub eta: f32,
+    transmittance: Vec<f32>,
+    internal_reflectance: f32,
+}
+
+impl RoughCoating {
+    /// Tabulates the coating (numerical integration of its specular albedo).
+    pub fn new(mf: Microfacet, eta: f32) -> Self {
+        let mu = |i: usize| (i as f32 / (TABLE - 1) as f32).max(1e-6);
+        let transmittance = (0..TABLE).map(|i| 1.0 - specular_albedo(&mf, eta, mu(i))).collect();
+        let internal = (0..TABLE).map(|i| specular_albedo(&mf, 1.0 / eta, mu(i)) * mu(i)).sum::<f32>() / TABLE as f32 * 2.0;
+        Self {
+            mf,
+            eta,
+            transmittance,
+            internal_reflectance: internal,
+        }
+    }
+
+    /// The coating's transmittance at cos θ (linear interpolation).
+    pub fn transmittance(&self, cos: f32) -> f32 {
+        let x = cos.clamp(0.0, 1.0) * (TABLE - 1) as f32;
+        let i = (x as usize).min(TABLE - 2);
+        let w = x - i as f32;
+        self.transmittance[i] * (1.0 - w) + self.transmittance[i + 1] * w
+    }
+
+    /// The internal diffuse reflectance of the coating.
+    pub fn internal_reflectance(&self) -> f32 {
+        self.internal_reflectance
+    }
+}
+
+/// The directional albedo of a rough dielectric coating's reflection at cos θ = `mu`, by
+/// stratified importance sampling of its microfacet normals.
+fn specular_albedo(mf: &Microfacet, eta: f32, mu: f32) -> f32 {
+    let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    let n = 48;
+    let mut sum = 0f64;
+    for i in 0..n {
+        for j in 0..n {
+            let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
+            let m = mf.sample(wo, u);
+            let wi = reflect(wo, m);
+            let pdf = microfacet_pdf(mf, wo, wi);
+            if let (Some((v, h)), true) = (microfacet_lobe(mf, wo, wi), pdf > 0.0) {
+                sum += (fresnel_dielectric(wo.dot(h), eta).0 * v / pdf) as f64;
+            }
+        }
+    }
+    ((sum / (n * n) as f64) as f32).min(1.0)
+}
+
+/// Parameters of a rough plastic at one point.
+#[derive(Clone, Copy, Debug)]
+pub struct RoughPlastic<'a> {
+    /// Diffuse reflectance of the base.
+    pub kd: Rgb,
+    /// Specular reflectance of the coating.
+    pub ks: Rgb,
+    /// The tabulated coating.
+    pub coating: &'a RoughCoating,
+    /// Use the colour-dependent internal reflection term.
+    pub nonlinear: bool,
+}
+
+impl RoughPlastic<'_> {
+    fn specular_probability(&self, t_i: f32) -> f32 {
+        let (d, s) = (self.kd.average(), self.ks.average());
+        let w = if d + s > 0.0 { s / (d + s) } else { 0.5 };
+        let ps = (1.0 - t_i) * w;
+        let pd = t_i * (1.0 - w);
+        if ps + pd > 0.0 {
+            ps / (ps + pd)
+        } else {
+            0.0
+        }
+    }
+
+    /// f·cos θi.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Rgb::BLACK;
+        }
+        let c = self.coating;
+        let spec = match microfacet_lobe(&c.mf, wo, wi) {
+            Some((v, h)) => self.ks * (fresnel_dielectric(wo.dot(h), c.eta).0 * v),
+            None => Rgb::BLACK,
+        };
+        let (t_i, t_o) = (c.transmittance(wo.z), c.transmittance(wi.z));
+        let diff = base(self.kd, c.internal_reflectance, self.nonlinear) * (INV_PI * wi.z * t_i * t_o / (c.eta * c.eta));
+        spec + diff
+    }
+
+    /// The density of [`RoughPlastic::sample`].
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let ps = self.specular_probability(self.coating.transmittance(wo.z));
+        ps * microfacet_pdf(&self.coating.mf, wo, wi) + (1.0 - ps) * cosine_hemisphere_pdf(wi.z)
+    }
+
+    /// Picks the coating's lobe or the diffuse base, then weights by the full pdf.
+    pub fn sample(&self, wo: Vec3, u1: f32, u2: [f32; 2]) -> Option<LocalSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let ps = self.specular_probability(self.coating.transmittance(wo.z));
+        let wi = if u1 < ps { reflect(wo, self.coating.mf.sample(wo, u2)) } else { square_to_cosine_hemisphere(u2) };
+        let pdf = self.pdf(wo, wi);
+        if !(pdf > 0.0) || wi.z <= 0.0 {
+            return None;
+        }
+        Some(LocalSample {
+            wi,
+            weight: self.eval(wo, wi) / pdf,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
+    }
+}

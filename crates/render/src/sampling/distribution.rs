@@ -1,0 +1,160 @@
+//! Piecewise-constant distributions in 1D and 2D, sampled by inverting their CDFs.
+
+/// A piecewise-constant density on [0, 1) with one value per bin.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution1D {
+    func: Vec<f32>,
+    cdf: Vec<f32>,
+    integral: f32,
+}
+
+impl Distribution1D {
+    /// The distribution proportional to `func` (negative or non-finite values count as 0; an
+    /// all-zero function becomes uniform).
+    pub fn new(func: &[f32]) -> Self {
+        let n = func.len().max(1);
+        let func: Vec<f32> = if func.is_empty() {
+            vec![1.0]
+        } else {
+            func.iter().map(|&f| if f.is_finite() && f > 0.0 { f } else { 0.0 }).collect()
+        };
+        let mut cdf = vec![0f32; n + 1];
+        let mut acc = 0f64;
+        for i in 0..n {
+            acc += func[i] as f64 / n as f64;
+            cdf[i + 1] = acc as f32;
+        }
+        let integral = acc as f32;
+        if integral > 0.0 {
+            for c in &mut cdf[1..] {
+                *c /= integral;
+            }
+        } else {
+            for (i, c) in cdf.iter_mut().enumerate() {
+                *c = i as f32 / n as f32;
+            }
+        }
+        cdf[n] = 1.0;
+        Self { func, cdf, integral }
+    }
+
+    /// Number of bins.
+    pub fn len(&self) -> usize {
+        self.func.len()
+    }
+
+    /// True when there are no bins (never: an empty input gives one bin).
+    pub fn is_empty(&self) -> bool {
+        self.func.is_empty()
+    }
+
+    /// The integral of the function over [0, 1).
+    pub fn integral(&self) -> f32 {
+        self.integral
+    }
+
+    /// The bin holding `u`'s inverse-CDF position, with the remapped `u` inside the bin.
+    #[inline]
+    pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
+        let n = self.func.len();
+        // The last bin whose CDF start is ≤ u.
+        let i = self.cdf[1..n].partition_point(|&c| c <= u).min(n - 1);
+        let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
+        let du = if hi > lo { ((u - lo) / (hi - lo)).clamp(0.0, super::sampler::ONE_MINUS_EPSILON) } else { 0.5 };
+        (i, du)
+    }
+
+    /// The probability of bin `i`.
+    #[inline]
+    pub fn discrete_pdf(&self, i: usize) -> f32 {
+        self.cdf[i + 1] - self.cdf[i]
+    }
+
+    /// A continuous sample in [0, 1) with its density.
+    #[inline]
+    pub fn sample_continuous(&self, u: f32) -> (f32, f32, usize) {
+        let (i, du) = self.sample_discrete(u);
+        let x = (i as f32 + du) / self.func.len() as f32;
+        (x, self.pdf(i), i)
+    }
+
+    /// The density of bin `i` (as a density over [0, 1)).
+    #[inline]
+    pub fn pdf(&self, i: usize) -> f32 {
+        self.discrete_pdf(i) * self.func.len() as f32
+    }
+}
+
+/// A piecewise-constant density on [0,1)² from a grid of values (row `v`, column `u`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution2D {
+    conditional: Vec<Distribution1D>,
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    /// The distribution proportional to `func` with `nu` columns and `nv` rows (row-major).
+    pub fn new(func: &[f32], nu: usize, nv: usize) -> Self {
+        let conditional: Vec<Distribution1D> = (0..nv).map(|v| Distribution1D::new(&func[v * nu..(v + 1) * nu])).collect();
+        let marginal = Distribution1D::new(&conditional.iter().map(|c| c.integral()).collect::<Vec<_>>());
+        Self { conditional, marginal }
+    }
+
+    /// A point (u, v) and its density.
+    #[inline]
+    pub fn sample(&self, u: [f32; 2]) -> ([f32; 2], f32) {
+        let (v, pdf_v, iv) = self.marginal.sample_continuous(u[1]);
+        let (x, pdf_u, _) = self.conditional[iv].sample_continuous(u[0]);
+        ([x, v], pdf_u * pdf_v)
+    }
+
+    /// The density at (u, v).
+    #[inline]
+    pub fn pdf(&self, p: [f32; 2]) -> f32 {
+        let nv = self.conditional.len();
+        let iv = ((p[1] * nv as f32) as usize).min(nv - 1);
+        let c = &self.conditional[iv];
+        let iu = ((p[0] * c.len() as f32) as usize).min(c.len() - 1);
+        c.pdf(iu) * self.marginal.pdf(iv)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_dimensional_by_hand() {
+        let d = Distribution1D::new(&[1.0, 3.0]);
+        assert!((d.integral() - 2.0).abs() < 1e-6);
+        assert!((d.discrete_pdf(0) - 0.25).abs() < 1e-6);
+        assert!((d.pdf(1) - 1.5).abs() < 1e-6);
+        assert_eq!(d.sample_discrete(0.1).0, 0);
+        assert_eq!(d.sample_discrete(0.3).0, 1);
+        let (x, pdf, _) = d.sample_continuous(0.625);
+        assert!((x - 0.75).abs() < 1e-6 && (pdf - 1.5).abs() < 1e-6);
+        // Zero bins are never chosen.
+        let z = Distribution1D::new(&[0.0, 2.0, 0.0]);
+        for u in [0.0, 0.3, 0.999] {
+            assert_eq!(z.sample_discrete(u).0, 1);
+        }
+        // All zero: uniform.
+        let u = Distribution1D::new(&[0.0, 0.0]);
+        assert!((u.discrete_pdf(1) - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn two_dimensional_pdf_matches_sampling() {
+        let f = [1.0, 2.0, 0.0, 5.0, 1.0, 1.0];
+        let d = Distribution2D::new(&f, 3, 2);
+        let mut rng = crate::sampling::Pcg32::new(1, 1);
+        for _ in 0..100 {
+            let (p, pdf) = d.sample([rng.next_f32(), rng.next_f32()]);
+            assert!((pdf - d.pdf(p)).abs() < 1e-4 * pdf.max(1.0));
+            assert!(pdf > 0.0);
+        }
+        // The density integrates to one: mean of f over the grid is 10/6.
+        assert!((d.pdf([0.9, 0.25]) - 0.0).abs() < 1e-6);
+        assert!((d.pdf([0.1, 0.75]) - 5.0 / (10.0 / 6.0)).abs() < 1e-4);
+    }
+}

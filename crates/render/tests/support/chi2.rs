@@ -1,0 +1,419 @@
+//! A χ² goodness-of-fit test of a direction sampler against its density, in the spirit of
+//! Mitsuba's `ChiSquareTest` and pbrt-v4's `bsdfs_test`, shared by the statistical tests of the
+//! render core (BSDFs, lights).
+//!
+//! Directions are binned on a spherical grid around an axis: rows in s ∈ [0, 1] with
+//! cos θ = 1 − 2 s^p (p = 1: equal-area rows; p = 2: s = sin(θ/2), rows nearly uniform in θ,
+//! which resolves narrow lobes around the axis), columns uniform in φ. One more cell holds the
+//! samples that returned no direction (`None`). The expected count of every cell is N times the
+//! integral of the density over it, computed by adaptive Gauss–Legendre cubature (each cell is
+//! split until the estimate changes by much less than one standard deviation of its count);
+//! the "no direction" cell expects N·(1 − ∫ pdf). Cells expecting fewer than 5 samples are pooled
+//! (ascending order, Mitsuba's procedure), the statistic is compared with the χ² distribution of
+//! (cells − 1) degrees of freedom and the hypothesis is rejected below the significance level
+//! 1 − (1 − α)^(1/m) (Šidák's correction for m tests at overall level α).
+//!
+//! Besides the statistic, the test checks that the density reported with each sample equals the
+//! density function (relative 1e-3), that no density is negative or NaN, and that the sampled
+//! mass (fraction of samples returning a direction) agrees with ∫ pdf dω, and with the mass the
+//! caller intends when it states one.
+#![allow(dead_code)]
+
+use candela_render::math::{Frame, Vec3};
+use candela_render::sampling::Pcg32;
+
+/// The overall significance level of a suite.
+pub const ALPHA: f64 = 0.01;
+
+/// The per-test significance level of `tests` tests at overall level `alpha` (Šidák).
+pub fn sidak(alpha: f64, tests: usize) -> f64 {
+    1.0 - (1.0 - alpha).powf(1.0 / tests.max(1) as f64)
+}
+
+/// A spherical grid around an axis.
+#[derive(Clone, Copy, Debug)]
+pub struct Grid {
+    /// The polar axis (unit).
+    pub axis: Vec3,
+    /// cos θ = 1 − 2 s^power.
+    pub power: f64,
+    /// Rows in s.
+    pub rows: usize,
+    /// Columns in φ.
+    pub cols: usize,
+}
+
+impl Grid {
+    /// A grid of `rows × 2·rows` cells around `axis`.
+    pub fn new(axis: Vec3, power: f64, rows: usize) -> Self {
+        Self {
+            axis: axis.normalize(),
+            power,
+            rows,
+            cols: 2 * rows,
+        }
+    }
+
+    fn frame(&self) -> Frame {
+        Frame::from_normal(self.axis.to_normal())
+    }
+
+    fn cell(&self, frame: &Frame, d: Vec3) -> usize {
+        let l = frame.to_local(d);
+        let (x, y, z) = (l.x as f64, l.y as f64, l.z as f64);
+        let n = (x * x + y * y + z * z).sqrt();
+        let c = (z / n).clamp(-1.0, 1.0);
+        let s = ((1.0 - c) * 0.5).max(0.0).powf(1.0 / self.power);
+        let mut phi = y.atan2(x);
+        if phi < 0.0 {
+            phi += 2.0 * std::f64::consts::PI;
+        }
+        let row = ((s * self.rows as f64) as usize).min(self.rows - 1);
+        let col =
+            ((phi / (2.0 * std::f64::consts::PI) * self.cols as f64) as usize).min(self.cols - 1);
+        row * self.cols + col
+    }
+}
+
+/// What a χ² run found.
+#[derive(Clone, Debug)]
+pub struct Report {
+    /// The statistic.
+    pub chi2: f64,
+    /// Degrees of freedom.
+    pub dof: usize,
+    /// P(χ² ≥ statistic).
+    pub p_value: f64,
+    /// The per-test significance level.
+    pub level: f64,
+    /// Fraction of samples that returned a direction.
+    pub sampled_mass: f64,
+    /// ∫ pdf dω over the sphere.
+    pub pdf_integral: f64,
+}
+
+/// One χ² test.
+pub struct Chi2<'a> {
+    /// What is tested (model, parameters, incident direction), for the failure message.
+    pub name: &'a str,
+    /// The binning.
+    pub grid: Grid,
+    /// Number of samples.
+    pub samples: usize,
+    /// Seed of the uniform numbers.
+    pub seed: u64,
+    /// The mass the density must have (fraction of samples returning a direction), when the
+    /// sampler is meant to return a direction with a known probability (e.g. 1).
+    pub expected_mass: Option<f64>,
+    /// The per-test significance level (see [`sidak`]).
+    pub level: f64,
+}
+
+/// 4-point Gauss–Legendre nodes and weights on [-1, 1].
+const GL_X: [f64; 4] = [
+    -0.861_136_311_594_052_6,
+    -0.339_981_043_584_856_3,
+    0.339_981_043_584_856_3,
+    0.861_136_311_594_052_6,
+];
+const GL_W: [f64; 4] = [
+    0.347_854_845_137_453_8,
+    0.652_145_154_862_546_1,
+    0.652_145_154_862_546_1,
+    0.347_854_845_137_453_8,
+];
+
+impl Chi2<'_> {
+    /// Runs the test: `sample(u)` maps three uniform numbers to a direction and the density the
+    /// sampler reports for it (or `None`), `pdf(d)` is the density per unit solid angle.
+    pub fn run(
+        &self,
+        sample: impl Fn([f32; 3]) -> Option<(Vec3, f32)>,
+        pdf: impl Fn(Vec3) -> f32,
+    ) -> Result<Report, String> {
+        let g = self.grid;
+        let frame = g.frame();
+        let cells = g.rows * g.cols;
+        let n = self.samples;
+        let fail = |what: String| Err(format!("χ² test of {}: {what}", self.name));
+
+        // Observed counts; the sampler's own pdf must agree with the density function.
+        let mut observed = vec![0f64; cells + 1];
+        let mut rng = Pcg32::new(self.seed, 0x5eed);
+        let mut pdf_mismatch: Option<(Vec3, f32, f32)> = None;
+        let mut mismatches = 0usize;
+        for _ in 0..n {
+            let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+            match sample(u) {
+                Some((d, p)) => {
+                    if !d.is_finite()
+                        || !(p.is_finite() && p > 0.0)
+                        || (d.norm() - 1.0).abs() > 1e-3
+                    {
+                        return fail(format!(
+                            "sample({u:?}) returned the direction {d:?} with density {p}"
+                        ));
+                    }
+                    let q = pdf(d);
+                    if !((p - q).abs() <= 1e-3 * p.max(q)) {
+                        mismatches += 1;
+                        if pdf_mismatch.is_none() {
+                            pdf_mismatch = Some((d, p, q));
+                        }
+                    }
+                    observed[g.cell(&frame, d)] += 1.0;
+                }
+                None => observed[cells] += 1.0,
+            }
+        }
+        // A few mismatches happen on edges in f32 (e.g. the half vector at grazing angles).
+        if mismatches as f64 > 1e-4 * n as f64 {
+            let (d, p, q) = pdf_mismatch.unwrap();
+            return fail(format!(
+                "{mismatches} of {n} samples report a density different from pdf(); e.g. {d:?}: sample says {p}, pdf says {q}"
+            ));
+        }
+
+        // Expected counts by adaptive cubature of the density over each cell.
+        let two_pi = 2.0 * std::f64::consts::PI;
+        let (ds, dphi) = (1.0 / g.rows as f64, two_pi / g.cols as f64);
+        let mut bad_density: Option<(Vec3, f32)> = None;
+        let integrand = |s: f64, phi: f64, bad: &mut Option<(Vec3, f32)>| -> f64 {
+            let c = 1.0 - 2.0 * s.powf(g.power);
+            let st = (1.0 - c * c).max(0.0).sqrt();
+            let l = Vec3::new((st * phi.cos()) as f32, (st * phi.sin()) as f32, c as f32);
+            let d = frame.to_world(l).normalize();
+            let v = pdf(d);
+            if !(v >= 0.0) || !v.is_finite() {
+                if bad.is_none() {
+                    *bad = Some((d, v));
+                }
+                return 0.0;
+            }
+            // dω = |d cos θ/ds| ds dφ.
+            v as f64 * 2.0 * g.power * s.powf(g.power - 1.0)
+        };
+        let gauss = |s0: f64, s1: f64, p0: f64, p1: f64, bad: &mut Option<(Vec3, f32)>| -> f64 {
+            let (hs, hp) = (0.5 * (s1 - s0), 0.5 * (p1 - p0));
+            let (ms, mp) = (0.5 * (s1 + s0), 0.5 * (p1 + p0));
+            let mut sum = 0.0;
+            for i in 0..4 {
+                for j in 0..4 {
+                    sum += GL_W[i] * GL_W[j] * integrand(ms + hs * GL_X[i], mp + hp * GL_X[j], bad);
+                }
+            }
+            sum * hs * hp
+        };
+        let mut expected = vec![0f64; cells + 1];
+        let mut total = 0.0;
+        for row in 0..g.rows {
+            for col in 0..g.cols {
+                let (s0, p0) = (row as f64 * ds, col as f64 * dphi);
+                let whole = gauss(s0, s0 + ds, p0, p0 + dphi, &mut bad_density);
+                // Tolerance on the count: 5 % of its standard deviation, at least 1e-3 samples.
+                let tol = (0.05 * (whole.abs() * n as f64).sqrt()).max(1e-3) / n as f64;
+                let v = adaptive(
+                    &gauss,
+                    s0,
+                    s0 + ds,
+                    p0,
+                    p0 + dphi,
+                    whole,
+                    tol,
+                    0,
+                    &mut bad_density,
+                );
+                expected[row * g.cols + col] = v * n as f64;
+                total += v;
+            }
+        }
+        if let Some((d, v)) = bad_density {
+            return fail(format!("pdf({d:?}) = {v} (negative or not finite)"));
+        }
+
+        // The sampled mass and the density's integral must agree.
+        let sampled_mass = 1.0 - observed[cells] / n as f64;
+        let sigma =
+            (total.clamp(1e-9, 1.0) * (1.0 - total.clamp(0.0, 1.0 - 1e-9)) / n as f64).sqrt();
+        if (sampled_mass - total).abs() > 5.0 * sigma + 2e-3 {
+            return fail(format!(
+                "the sampler returns a direction with probability {sampled_mass:.5} but the density integrates to {total:.5}"
+            ));
+        }
+        if let Some(m) = self.expected_mass {
+            if (total - m).abs() > 2e-3 {
+                return fail(format!(
+                    "the density integrates to {total:.5}, not to the intended mass {m}"
+                ));
+            }
+        }
+        expected[cells] = n as f64 * (1.0 - total).max(0.0);
+
+        // Pool the cells expecting < 5 samples, in ascending order of expectation.
+        let mut order: Vec<usize> = (0..=cells).collect();
+        order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
+        let (mut chi2, mut dof_cells) = (0.0, 0usize);
+        let (mut pool_obs, mut pool_exp) = (0.0, 0.0);
+        for &i in &order {
+            let (o, e) = (observed[i], expected[i]);
+            if e < 1e-9 * n as f64 {
+                // Samples where the density is zero: tolerate a handful on edges (f32 round-off).
+                if o > 1e-5 * n as f64 + 2.0 {
+                    return fail(format!(
+                        "{o} samples fell in cell {i} where the density integrates to {:.3e}",
+                        e / n as f64
+                    ));
+                }
+                pool_obs += o;
+                continue;
+            }
+            if e < 5.0 || (pool_exp > 0.0 && pool_exp < 5.0) {
+                pool_obs += o;
+                pool_exp += e;
+            } else {
+                chi2 += (o - e) * (o - e) / e;
+                dof_cells += 1;
+            }
+        }
+        if pool_exp > 0.0 {
+            chi2 += (pool_obs - pool_exp) * (pool_obs - pool_exp) / pool_exp;
+            dof_cells += 1;
+        }
+        let dof = dof_cells.saturating_sub(1).max(1);
+        let p_value = chi2_survival(chi2, dof as f64);
+        let report = Report {
+            chi2,
+            dof,
+            p_value,
+            level: self.level,
+            sampled_mass,
+            pdf_integral: total,
+        };
+        if !(p_value >= self.level) {
+            return fail(format!(
+                "rejected: χ² = {chi2:.1} with {dof} degrees of freedom, p-value {p_value:.3e} < {:.3e} (Šidák-corrected 0.01); sampled mass {sampled_mass:.5}, ∫pdf {total:.5}",
+                self.level
+            ));
+        }
+        Ok(report)
+    }
+}
+
+/// Refines the cubature of a cell until halving it changes the estimate by less than `tol`
+/// (each quarter gets half the tolerance: along a discontinuity the error halves per level).
+fn adaptive(
+    gauss: &impl Fn(f64, f64, f64, f64, &mut Option<(Vec3, f32)>) -> f64,
+    s0: f64,
+    s1: f64,
+    p0: f64,
+    p1: f64,
+    whole: f64,
+    tol: f64,
+    depth: u32,
+    bad: &mut Option<(Vec3, f32)>,
+) -> f64 {
+    let (sm, pm) = (0.5 * (s0 + s1), 0.5 * (p0 + p1));
+    let quads = [
+        (s0, sm, p0, pm),
+        (sm, s1, p0, pm),
+        (s0, sm, pm, p1),
+        (sm, s1, pm, p1),
+    ];
+    let parts = quads.map(|(a, b, c, d)| gauss(a, b, c, d, bad));
+    let sum: f64 = parts.iter().sum();
+    if depth >= 6 || (sum - whole).abs() <= tol {
+        return sum;
+    }
+    quads
+        .iter()
+        .zip(parts)
+        .map(|(&(a, b, c, d), w)| adaptive(gauss, a, b, c, d, w, 0.5 * tol, depth + 1, bad))
+        .sum()
+}
+
+/// ln Γ(x) for x > 0 (Lanczos, g = 7, 9 terms; ~1e-15 relative).
+pub fn ln_gamma(x: f64) -> f64 {
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        // Reflection: Γ(x)Γ(1 − x) = π / sin(πx).
+        let pi = std::f64::consts::PI;
+        return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let mut a = C[0];
+    let t = x + 7.5;
+    for (i, &c) in C.iter().enumerate().skip(1) {
+        a += c / (x + i as f64);
+    }
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+/// The regularised upper incomplete gamma function Q(a, x) = Γ(a, x)/Γ(a): by its series for
+/// x < a + 1 (Q = 1 − P), by Lentz's continued fraction otherwise (Numerical Recipes §6.2).
+pub fn gamma_q(a: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 1.0;
+    }
+    let ln_pre = a * x.ln() - x - ln_gamma(a);
+    if x < a + 1.0 {
+        let (mut ap, mut del) = (a, 1.0 / a);
+        let mut sum = del;
+        for _ in 0..100_000 {
+            ap += 1.0;
+            del *= x / ap;
+            sum += del;
+            if del.abs() < sum.abs() * 1e-15 {
+                break;
+            }
+        }
+        (1.0 - sum * ln_pre.exp()).max(0.0)
+    } else {
+        let tiny = 1e-300;
+        let mut b = x + 1.0 - a;
+        let mut c = 1.0 / tiny;
+        let mut d = 1.0 / b;
+        let mut h = d;
+        for i in 1..100_000 {
+            let an = -(i as f64) * (i as f64 - a);
+            b += 2.0;
+            d = an * d + b;
+            if d.abs() < tiny {
+                d = tiny;
+            }
+            c = b + an / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            d = 1.0 / d;
+            let del = d * c;
+            h *= del;
+            if (del - 1.0).abs() < 1e-15 {
+                break;
+            }
+        }
+        (ln_pre.exp() * h).clamp(0.0, 1.0)
+    }
+}
+
+/// P(X ≥ x) for X ~ χ²(dof).
+pub fn chi2_survival(x: f64, dof: f64) -> f64 {
+    gamma_q(0.5 * dof, 0.5 * x)
+}
+
+/// The mean and the standard error of the mean of `n` values.
+pub fn mean_and_error(sum: f64, sum2: f64, n: usize) -> (f64, f64) {
+    let n = n as f64;
+    let mean = sum / n;
+    let var = (sum2 / n - mean * mean).max(0.0) * n / (n - 1.0);
+    (mean, (var / n).sqrt())
+}

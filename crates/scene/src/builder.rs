@@ -1,0 +1,439 @@
+//! Builds a render scene from a scene description of the candela language, validating what the
+//! parser could not (files, singular transformations, unbounded polyhedra, CSG operands), each
+//! error at its source position.
+
+use crate::error::{Pos, SceneError};
+use crate::lang::ast::{self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind};
+use candela_render::accel::AccelKind;
+use candela_render::camera::Camera;
+use candela_render::light::{Components, DistantLight, Environment, Falloff, HemisphereLight, Light, PointLight, SpotLight, SpotProfile};
+use candela_render::material::{Distribution, Lobe, Material, MaterialId, Microfacet, Model};
+use candela_render::math::{Transform, Vec3};
+use candela_render::scene::{Emission, SceneBuilder};
+use candela_render::shape::{Cube, Csg, CsgNode, CsgOp, Mesh, Parallelogram, Plane, Polyhedron, Shape, Solid, Sphere};
+use candela_render::texture::{Filter, Texture};
+use candela_render::{Rgb, Scene};
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What the builder reports besides the scene.
+#[derive(Clone, Debug, Default)]
+pub struct BuildReport {
+    /// Warnings with their positions, ready to print.
+    pub warnings: Vec<String>,
+    /// Triangles in meshes.
+    pub triangles: usize,
+    /// Bytes per mesh triangle (attributes, indices, primitive record), when there are meshes.
+    pub bytes_per_triangle: Option<f64>,
+}
+
+/// Builds the render scene of `desc` with the acceleration structure `accel`.
+pub fn build_scene(desc: &SceneDescription, accel: AccelKind) -> Result<(Scene, BuildReport), SceneError> {
+    let mut b = Builder {
+        desc,
+        scene: SceneBuilder::new(),
+        materials: Vec::new(),
+        images: HashMap::new(),
+        meshes: HashMap::new(),
+        report: BuildReport::default(),
+        mesh_bytes: 0.0,
+    };
+    b.materials()?;
+    b.camera();
+    b.lights()?;
+    for shape in &desc.shapes {
+        b.add_shape(shape, &Transform::IDENTITY, 0)?;
+    }
+    if b.report.triangles > 0 {
+        b.report.bytes_per_triangle = Some(b.mesh_bytes / b.report.triangles as f64);
+    }
+    Ok((b.scene.build(accel), b.report))
+}
+
+struct Builder<'a> {
+    desc: &'a SceneDescription,
+    scene: SceneBuilder,
+    /// Material index of the description → render material and emission.
+    materials: Vec<(MaterialId, Option<u32>)>,
+    images: HashMap<PathBuf, Arc<candela_render::Image>>,
+    meshes: HashMap<PathBuf, Arc<Mesh>>,
+    report: BuildReport,
+    mesh_bytes: f64,
+}
+
+/// Deepest nesting of instances (a shape may not contain itself, but chains can be long).
+const MAX_NESTING: u32 = 256;
+
+impl Builder<'_> {
+    fn err(&self, pos: Pos, msg: impl Into<String>) -> SceneError {
+        self.desc.error(pos, msg)
+    }
+
+    fn texture(&mut self, p: &ast::Pigment) -> Result<Texture, SceneError> {
+        Ok(match &p.kind {
+            PigmentKind::Uniform(c) => Texture::Uniform(*c),
+            PigmentKind::Checkered { color1, color2, steps } => Texture::Checkered {
+                c1: *color1,
+                c2: *color2,
+                steps: *steps,
+            },
+            PigmentKind::Image(file) => {
+                let image = match self.images.get(&file.path) {
+                    Some(i) => i.clone(),
+                    None => {
+                        let img = candela_imageio::read_image(&file.path).map_err(|e| self.err(file.pos, format!("cannot load image '{}': {e}", file.name)))?;
+                        let img = Arc::new(img);
+                        self.images.insert(file.path.clone(), img.clone());
+                        img
+                    }
+                };
+                if image.width() == 0 || image.height() == 0 {
+                    return Err(self.err(file.pos, format!("image '{}' is empty", file.name)));
+                }
+                Texture::Image {
+                    image,
+                    filter: Filter::Nearest,
+                    scale: [1.0, 1.0],
+                }
+            }
+        })
+    }
+
+    fn materials(&mut self) -> Result<(), SceneError> {
+        for m in &self.desc.materials {
+            let model = match &m.brdf.kind {
+                BrdfKind::Diffuse { kd } => Model::Diffuse { reflectance: self.texture(kd)? },
+                BrdfKind::Specular { ks } => Model::Specular { reflectance: self.texture(ks)? },
+                BrdfKind::Phong { kd, ks, exponent } | BrdfKind::BlinnPhong { kd, ks, exponent } => Model::Phong {
+                    lobe: if matches!(m.brdf.kind, BrdfKind::Phong { .. }) { Lobe::Phong } else { Lobe::BlinnPhong },
+                    kd: self.texture(kd)?,
+                    ks: self.texture(ks)?,
+                    n: exponent.max(0.0),
+                },
+                BrdfKind::CookTorrance {
+                    kd,
+                    ks,
+                    roughness,
+                    ior,
+                    distribution,
+                } => Model::CookTorrance {
+                    kd: self.texture(kd)?,
+                    ks: self.texture(ks)?,
+                    mf: Microfacet::new(
+                        match distribution {
+                            ast::Distribution::Beckmann => Distribution::Beckmann,
+                            ast::Distribution::Ggx => Distribution::Ggx,
+                        },
+                        *roughness,
+                    ),
+                    ior: *ior,
+                },
+                BrdfKind::Glass { ior, kt } => {
+                    if !(*ior > 0.0) {
+                        return Err(self.err(m.brdf.pos, format!("the index of refraction must be positive, not {ior}")));
+                    }
+                    Model::Dielectric {
+                        eta: *ior,
+                        reflectance: Texture::Uniform(Rgb::WHITE),
+                        transmittance: self.texture(kt)?,
+                        mf: None,
+                    }
+                }
+            };
+            let id = self.scene.add_material(Material::two_sided(model));
+            let emission = match &m.emission.kind {
+                PigmentKind::Uniform(c) if c.is_black() => None,
+                _ => {
+                    let radiance = self.texture(&m.emission)?;
+                    Some(self.scene.add_emission(Emission { radiance, two_sided: true }))
+                }
+            };
+            self.materials.push((id, emission));
+        }
+        Ok(())
+    }
+
+    fn camera(&mut self) {
+        match &self.desc.camera {
+            Some(c) => {
+                let cam = match c.projection {
+                    ast::Projection::Perspective => Camera::perspective(c.distance, c.aspect_ratio, c.transform),
+                    ast::Projection::Orthogonal => Camera::orthogonal(c.aspect_ratio, c.transform),
+                };
+                self.scene.camera(cam);
+            }
+            None => self.report.warnings.push(format!(
+                "{}: no camera: using a perspective camera at the origin looking along +x",
+                self.desc.source.path.display()
+            )),
+        }
+    }
+
+    fn lights(&mut self) -> Result<(), SceneError> {
+        for l in &self.desc.lights {
+            let c = l.local_components();
+            let components = Components {
+                ambient: c.ambient,
+                diffuse: c.diffuse,
+                specular: c.specular,
+            };
+            let unit = |v: Vec3, what: &str| -> Result<Vec3, SceneError> {
+                let n = v.norm();
+                if n > 0.0 && n.is_finite() {
+                    Ok(v / n)
+                } else {
+                    Err(self.desc.error(l.pos, format!("the {what} must not be the zero vector")))
+                }
+            };
+            let att = |a: &Option<ast::Attenuation>| a.map(|a| [a.constant, a.linear, a.quadratic]);
+            let light = match &l.kind {
+                LightKind::Point {
+                    position,
+                    intensity,
+                    radius,
+                    attenuation,
+                } => Light::Point(
+                    PointLight {
+                        position: *position,
+                        intensity: *intensity,
+                        falloff: Falloff {
+                            radius: *radius,
+                            attenuation: att(attenuation),
+                        },
+                    },
+                    components,
+                ),
+                LightKind::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cutoff_deg,
+                    exponent,
+                    attenuation,
+                } => Light::Spot(
+                    SpotLight {
+                        position: *position,
+                        axis: unit(*direction, "spot direction")?,
+                        intensity: *intensity,
+                        cos_cutoff: cutoff_deg.to_radians().cos(),
+                        profile: SpotProfile::Power(*exponent),
+                        falloff: Falloff {
+                            radius: 0.0,
+                            attenuation: att(attenuation),
+                        },
+                    },
+                    components,
+                ),
+                LightKind::Distant { direction, intensity } => Light::Distant(
+                    DistantLight {
+                        direction: unit(*direction, "light direction")?,
+                        irradiance: *intensity,
+                    },
+                    components,
+                ),
+                LightKind::Hemisphere { intensity, up } => Light::Hemisphere(
+                    HemisphereLight {
+                        radiance: *intensity,
+                        up: unit(*up, "up direction")?,
+                    },
+                    components,
+                ),
+            };
+            self.scene.add_light(light);
+        }
+        for a in &self.desc.ambient_lights {
+            self.scene.add_ambient(a.intensity);
+        }
+        for e in &self.desc.environments {
+            let tex = self.texture(&e.pigment)?;
+            let t = self.check_transform(&e.transform, e.pos)?;
+            self.scene.add_light(Light::Environment(Environment::new(tex, t)));
+        }
+        Ok(())
+    }
+
+    fn check_transform(&self, t: &Transform, pos: Pos) -> Result<Transform, SceneError> {
+        let finite = t.m.m.iter().flatten().chain(t.inv.m.iter().flatten()).all(|x| x.is_finite());
+        if finite && t.is_consistent(1e-3 * (1.0 + t.m.m.iter().flatten().fold(0f32, |a, x| a.max(x.abs())))) {
+            Ok(*t)
+        } else {
+            Err(self.err(pos, "the transformation is singular (a scaling by zero?)"))
+        }
+    }
+
+    fn mesh(&mut self, file: &ast::FileRef) -> Result<Arc<Mesh>, SceneError> {
+        if let Some(m) = self.meshes.get(&file.path) {
+            return Ok(m.clone());
+        }
+        let m = crate::mesh::load_mesh(&file.path, &Transform::IDENTITY).map_err(|e| self.err(file.pos, e))?;
+        if m.is_empty() {
+            self.report.warnings.push(format!("{}:{}: mesh '{}' has no triangles", self.desc.source.path.display(), file.pos, file.name));
+        }
+        let m = Arc::new(m);
+        self.meshes.insert(file.path.clone(), m.clone());
+        Ok(m)
+    }
+
+    fn props(&self, m: &ast::MaterialRef) -> (MaterialId, Option<u32>) {
+        self.materials[m.index]
+    }
+
+    /// Adds `shape`, moved by `extra` (the placements of enclosing instances), to the world.
+    fn add_shape(&mut self, shape: &ast::Shape, extra: &Transform, depth: u32) -> Result<(), SceneError> {
+        if depth > MAX_NESTING {
+            return Err(self.err(shape.pos, "shapes are nested too deeply"));
+        }
+        let place = |b: &Self, t: &Transform| b.check_transform(&(*extra * *t), shape.pos);
+        match &shape.kind {
+            ShapeKind::Sphere { material, transform } => {
+                let (m, e) = self.props(material);
+                let t = place(self, transform)?;
+                self.scene.add_shape(Shape::Sphere(Sphere::new(t)), m, e);
+            }
+            ShapeKind::Plane { material, transform } => {
+                let (m, e) = self.props(material);
+                let t = place(self, transform)?;
+                self.scene.add_shape(Shape::Plane(Plane::new(t)), m, e);
+            }
+            ShapeKind::Box { material, transform } => {
+                let (m, e) = self.props(material);
+                let t = place(self, transform)?;
+                self.scene.add_shape(Shape::Cube(Cube::new(t)), m, e);
+            }
+            ShapeKind::Triangle { material, vertices } => {
+                let (m, e) = self.props(material);
+                let mut mesh = Mesh {
+                    positions: vertices.iter().map(|v| extra.point(*v)).collect(),
+                    indices: vec![[0, 1, 2]],
+                    ..Default::default()
+                };
+                let [a, b, c] = [mesh.positions[0], mesh.positions[1], mesh.positions[2]];
+                if !((b - a).cross(c - a).norm() > 0.0) {
+                    return Err(self.err(shape.pos, "the triangle is degenerate (its vertices are aligned)"));
+                }
+                mesh.props.material = m;
+                mesh.props.emission = e;
+                self.add_mesh(mesh);
+            }
+            ShapeKind::Parallelogram {
+                material,
+                origin,
+                edge1,
+                edge2,
+            } => {
+                let (m, e) = self.props(material);
+                let p = Parallelogram::new(extra.point(*origin), extra.vector(*edge1), extra.vector(*edge2))
+                    .ok_or_else(|| self.err(shape.pos, "the parallelogram is degenerate (its edges are parallel or zero)"))?;
+                self.scene.add_shape(Shape::Parallelogram(p), m, e);
+            }
+            ShapeKind::Polyhedron { material, .. } => {
+                let (m, e) = self.props(material);
+                let p = self.polyhedron(shape, extra)?;
+                self.scene.add_shape(Shape::Polyhedron(p), m, e);
+            }
+            ShapeKind::Mesh { material, transform, file } => {
+                let (m, e) = self.props(material);
+                let t = place(self, transform)?;
+                let mut mesh = self.mesh(file)?.transformed(&t);
+                mesh.props.material = m;
+                mesh.props.emission = e;
+                self.add_mesh(mesh);
+            }
+            ShapeKind::Csg { .. } => {
+                let mut nodes = Vec::new();
+                self.csg(shape, extra, &mut nodes, depth)?;
+                let csg = Csg::new(nodes).ok_or_else(|| self.err(shape.pos, "invalid CSG tree"))?;
+                self.scene.add_shape(Shape::Csg(Box::new(csg)), 0, None);
+            }
+            ShapeKind::Instance { index, transform, .. } => {
+                let t = place(self, transform)?;
+                let named = &self.desc.named_shape(*index).shape;
+                self.add_shape(named, &t, depth + 1)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn add_mesh(&mut self, mesh: Mesh) {
+        self.report.triangles += mesh.len();
+        self.mesh_bytes += crate::mesh::bytes_per_triangle(&mesh) * mesh.len() as f64;
+        self.scene.add_mesh(mesh);
+    }
+
+    fn polyhedron(&self, shape: &ast::Shape, extra: &Transform) -> Result<Polyhedron, SceneError> {
+        let ShapeKind::Polyhedron { transform, half_spaces, .. } = &shape.kind else {
+            unreachable!("called on polyhedra only")
+        };
+        let t = self.check_transform(&(*extra * *transform), shape.pos)?;
+        let hs: Vec<(Vec3, f32)> = half_spaces.iter().map(|h| (h.normal, h.d)).collect();
+        Polyhedron::new(t, &hs).map_err(|e| match e {
+            candela_render::shape::PolyhedronError::BadNormal(i) => self.err(half_spaces[i].pos, e.to_string()),
+            _ => self.err(shape.pos, e.to_string()),
+        })
+    }
+
+    /// Appends the CSG nodes of `shape` (operands first) and returns the index of its root.
+    fn csg(&mut self, shape: &ast::Shape, extra: &Transform, nodes: &mut Vec<CsgNode>, depth: u32) -> Result<u32, SceneError> {
+        if depth > MAX_NESTING {
+            return Err(self.err(shape.pos, "shapes are nested too deeply"));
+        }
+        let leaf = |solid: Solid, m: &ast::MaterialRef, b: &Self, nodes: &mut Vec<CsgNode>| {
+            let (material, emission) = b.props(m);
+            nodes.push(CsgNode::Leaf {
+                solid,
+                props: candela_render::interaction::SurfaceProps {
+                    material,
+                    emission,
+                    light: None,
+                },
+            });
+            Ok((nodes.len() - 1) as u32)
+        };
+        match &shape.kind {
+            ShapeKind::Sphere { material, transform } => {
+                let t = self.check_transform(&(*extra * *transform), shape.pos)?;
+                leaf(Solid::Sphere(Sphere::new(t)), material, self, nodes)
+            }
+            ShapeKind::Box { material, transform } => {
+                let t = self.check_transform(&(*extra * *transform), shape.pos)?;
+                leaf(Solid::Cube(Cube::new(t)), material, self, nodes)
+            }
+            ShapeKind::Polyhedron { material, .. } => {
+                let p = self.polyhedron(shape, extra)?;
+                leaf(Solid::Polyhedron(p), material, self, nodes)
+            }
+            ShapeKind::Mesh { material, transform, file } => {
+                let t = self.check_transform(&(*extra * *transform), shape.pos)?;
+                let m = self.mesh(file)?.transformed(&t);
+                leaf(Solid::Mesh(m), material, self, nodes)
+            }
+            ShapeKind::Csg { op, operands, transform } => {
+                let t = self.check_transform(&(*extra * *transform), shape.pos)?;
+                let a = self.csg(&operands[0], &t, nodes, depth + 1)?;
+                let b = self.csg(&operands[1], &t, nodes, depth + 1)?;
+                nodes.push(CsgNode::Op {
+                    op: match op {
+                        ast::CsgOp::Union => CsgOp::Union,
+                        ast::CsgOp::Difference => CsgOp::Difference,
+                        ast::CsgOp::Intersection => CsgOp::Intersection,
+                        ast::CsgOp::Fusion => CsgOp::Fusion,
+                    },
+                    a,
+                    b,
+                });
+                Ok((nodes.len() - 1) as u32)
+            }
+            ShapeKind::Instance { index, transform, .. } => {
+                let t = self.check_transform(&(*extra * *transform), shape.pos)?;
+                let named = &self.desc.named_shape(*index).shape;
+                self.csg(named, &t, nodes, depth + 1)
+            }
+            ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } => Err(self.err(
+                shape.pos,
+                "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles and parallelograms enclose no volume",
+            )),
+        }
+    }
+}
+

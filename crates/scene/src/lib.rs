@@ -1,0 +1,19 @@
+//! candela's scene files: the candela scene language, Mitsuba 3 XML, OBJ/PLY meshes.
+//!
+//! - [`error`]: [`SceneError`] and source positions, shared by every reader of the crate.
+//! - [`lang`]: the lexer and parser of the candela language, producing a [`SceneDescription`].
+//! - [`builder`]: the description → a render scene, validating files and geometry.
+//! - [`mesh`]: OBJ and PLY meshes.
+//! - [`mitsuba`]: Mitsuba 3 XML import.
+//! - [`load`]: loading either format, and the built-in demo scene.
+
+pub mod builder;
+pub mod error;
+pub mod lang;
+pub mod load;
+pub mod mesh;
+pub mod mitsuba;
+
+pub use error::{Pos, SceneError, SourceFile};
+pub use lang::{parse_define, parse_scene, parse_scene_file, SceneDescription};
+pub use load::{demo_scene, load_scene, LoadOptions, LoadedScene, RenderHints, DEMO_SCENE};

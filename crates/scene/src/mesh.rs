@@ -1,0 +1,308 @@
+//! Triangle meshes from Wavefront OBJ (through `tobj`) and PLY (ASCII and binary, through
+//! `ply-rs-bw`), loaded into candela's mesh layout: one array per attribute, in world space.
+//!
+//! Polygons are split into fans of triangles. Vertex normals and texture coordinates are kept
+//! when every vertex has them. OBJ texture coordinates are flipped in v (OBJ's v grows upwards,
+//! candela's image lookup counts rows from the top, as Mitsuba does). Indices are validated;
+//! faces with an out-of-range index are an error, degenerate faces are dropped.
+
+use candela_render::math::{Normal3, Point2, Point3, Transform};
+use candela_render::shape::Mesh;
+use ply_rs_bw::parser::{Parser, Reader};
+use ply_rs_bw::ply::{BeginList, PropertyAccess, PropertyAccessResult};
+use std::path::Path;
+
+/// Loads `path` (`.obj` or `.ply`, case-insensitive) and moves it by `transform`.
+/// The error is a message for the user (the caller adds the position).
+pub fn load_mesh(path: &Path, transform: &Transform) -> Result<Mesh, String> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let mut mesh = match ext.as_deref() {
+        Some("obj") => load_obj(path)?,
+        Some("ply") => load_ply(path)?,
+        _ => return Err(format!("'{}': unknown mesh format (use .obj or .ply)", path.display())),
+    };
+    if mesh.positions.iter().any(|p| !p.is_finite()) {
+        return Err(format!("'{}': a vertex position is not a finite number", path.display()));
+    }
+    if !transform.is_identity() {
+        mesh = mesh.transformed(transform);
+    }
+    Ok(mesh)
+}
+
+/// Bytes used by a mesh per triangle (attributes, indices and the scene's primitive record).
+pub fn bytes_per_triangle(m: &Mesh) -> f64 {
+    let bytes = m.positions.len() * 12 + m.normals.len() * 12 + m.uvs.len() * 8 + m.indices.len() * 12;
+    // Each triangle also takes a 12-byte primitive reference in the scene.
+    bytes as f64 / m.indices.len().max(1) as f64 + 12.0
+}
+
+fn read_error(path: &Path, e: impl std::fmt::Display) -> String {
+    format!("cannot read mesh '{}': {e}", path.display())
+}
+
+fn load_obj(path: &Path) -> Result<Mesh, String> {
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| read_error(path, e))?;
+    let mut mesh = Mesh::default();
+    let mut all_normals = true;
+    let mut all_uvs = true;
+    for model in &models {
+        let m = &model.mesh;
+        let nv = m.positions.len() / 3;
+        all_normals &= m.normals.len() == nv * 3;
+        all_uvs &= m.texcoords.len() == nv * 2;
+    }
+    for model in models {
+        let m = model.mesh;
+        let base = mesh.positions.len() as u32;
+        let nv = (m.positions.len() / 3) as u32;
+        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| Point3::new(p[0], p[1], p[2])));
+        if all_normals {
+            mesh.normals.extend(m.normals.chunks_exact(3).map(|n| Normal3::new(n[0], n[1], n[2])));
+        }
+        if all_uvs {
+            mesh.uvs.extend(m.texcoords.chunks_exact(2).map(|t| Point2::new(t[0], 1.0 - t[1])));
+        }
+        for tri in m.indices.chunks_exact(3) {
+            if tri.iter().any(|&i| i >= nv) {
+                return Err(format!("'{}': a face refers to a vertex that does not exist", path.display()));
+            }
+            push_triangle(&mut mesh, [base + tri[0], base + tri[1], base + tri[2]]);
+        }
+    }
+    Ok(mesh)
+}
+
+/// Appends a triangle unless two of its indices coincide.
+fn push_triangle(mesh: &mut Mesh, t: [u32; 3]) {
+    if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
+        mesh.indices.push(t);
+    }
+}
+
+/// A PLY vertex: the properties candela uses.
+#[derive(Clone, Copy, Default)]
+struct PlyVertex {
+    p: [f32; 3],
+    n: [f32; 3],
+    uv: [f32; 2],
+    has: u8,
+}
+
+const HAS_N: u8 = 1;
+const HAS_UV: u8 = 2;
+
+impl PlyVertex {
+    fn set(&mut self, name: &str, v: f64) -> PropertyAccessResult {
+        let v = v as f32;
+        match name {
+            "x" => self.p[0] = v,
+            "y" => self.p[1] = v,
+            "z" => self.p[2] = v,
+            "nx" => (self.n[0], self.has) = (v, self.has | HAS_N),
+            "ny" => self.n[1] = v,
+            "nz" => self.n[2] = v,
+            "u" | "s" | "texture_u" | "texture_s" => (self.uv[0], self.has) = (v, self.has | HAS_UV),
+            "v" | "t" | "texture_v" | "texture_t" => self.uv[1] = v,
+            _ => return PropertyAccessResult::Ignored,
+        }
+        PropertyAccessResult::Set
+    }
+}
+
+impl PropertyAccess for PlyVertex {
+    fn new() -> Self {
+        Self::default()
+    }
+    fn set_float(&mut self, name: &str, v: f32) -> PropertyAccessResult {
+        self.set(name, v as f64)
+    }
+    fn set_double(&mut self, name: &str, v: f64) -> PropertyAccessResult {
+        self.set(name, v)
+    }
+    fn set_char(&mut self, name: &str, v: i8) -> PropertyAccessResult {
+        self.set(name, v as f64)
+    }
+    fn set_uchar(&mut self, name: &str, v: u8) -> PropertyAccessResult {
+        self.set(name, v as f64)
+    }
+    fn set_short(&mut self, name: &str, v: i16) -> PropertyAccessResult {
+        self.set(name, v as f64)
+    }
+    fn set_ushort(&mut self, name: &str, v: u16) -> PropertyAccessResult {
+        self.set(name, v as f64)
+    }
+    fn set_int(&mut self, name: &str, v: i32) -> PropertyAccessResult {
+        self.set(name, v as f64)
+    }
+    fn set_uint(&mut self, name: &str, v: u32) -> PropertyAccessResult {
+        self.set(name, v as f64)
+    }
+}
+
+/// A PLY face: its vertex indices (any integer list type).
+#[derive(Clone, Default)]
+struct PlyFace {
+    indices: Vec<i64>,
+    bad: bool,
+}
+
+fn is_index_list(name: &str) -> bool {
+    name == "vertex_indices" || name == "vertex_index"
+}
+
+macro_rules! face_list {
+    ($($f:ident: $t:ty),*) => {
+        $(fn $f(&mut self, name: &str, v: Vec<$t>) -> PropertyAccessResult {
+            if !is_index_list(name) {
+                return PropertyAccessResult::Ignored;
+            }
+            self.indices = v.into_iter().map(|x| x as i64).collect();
+            PropertyAccessResult::Set
+        })*
+    };
+}
+
+impl PropertyAccess for PlyFace {
+    fn new() -> Self {
+        Self::default()
+    }
+    face_list!(set_list_char: i8, set_list_uchar: u8, set_list_short: i16, set_list_ushort: u16, set_list_int: i32, set_list_uint: u32);
+    fn set_list_float(&mut self, name: &str, _: Vec<f32>) -> PropertyAccessResult {
+        self.bad |= is_index_list(name);
+        PropertyAccessResult::Ignored
+    }
+    fn set_list_double(&mut self, name: &str, _: Vec<f64>) -> PropertyAccessResult {
+        self.set_list_float(name, Vec::new())
+    }
+    fn begin_list_int(&mut self, _: &str, _: usize) -> BeginList<'_, i32> {
+        BeginList::UseSetter
+    }
+}
+
+fn load_ply(path: &Path) -> Result<Mesh, String> {
+    let file = std::fs::File::open(path).map_err(|e| read_error(path, e))?;
+    let file_len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let mut reader = Reader::new(std::io::BufReader::new(file));
+    let vparser = Parser::<PlyVertex>::new();
+    let fparser = Parser::<PlyFace>::new();
+    let header = vparser.read_header(&mut reader).map_err(|e| read_error(path, e))?;
+    let mut vertices: Vec<PlyVertex> = Vec::new();
+    let mut faces: Vec<PlyFace> = Vec::new();
+    for (name, def) in &header.elements {
+        // Every element takes at least one byte (binary) or one character (ASCII).
+        if def.count as u64 > file_len {
+            return Err(format!("'{}': the header announces {} {name} elements, more than the file holds", path.display(), def.count));
+        }
+        match name.as_str() {
+            "vertex" => vertices = vparser.read_payload_for_element(&mut reader, def, &header).map_err(|e| read_error(path, e))?,
+            "face" => faces = fparser.read_payload_for_element(&mut reader, def, &header).map_err(|e| read_error(path, e))?,
+            // Other elements must still be consumed to reach the ones after them.
+            _ => {
+                fparser.read_payload_for_element(&mut reader, def, &header).map_err(|e| read_error(path, e))?;
+            }
+        }
+    }
+    let nv = vertices.len() as i64;
+    let mut mesh = Mesh {
+        positions: vertices.iter().map(|v| Point3::new(v.p[0], v.p[1], v.p[2])).collect(),
+        ..Default::default()
+    };
+    if !vertices.is_empty() && vertices.iter().all(|v| v.has & HAS_N != 0) {
+        mesh.normals = vertices.iter().map(|v| Normal3::new(v.n[0], v.n[1], v.n[2])).collect();
+    }
+    if !vertices.is_empty() && vertices.iter().all(|v| v.has & HAS_UV != 0) {
+        mesh.uvs = vertices.iter().map(|v| Point2::new(v.uv[0], v.uv[1])).collect();
+    }
+    mesh.indices.reserve(faces.len());
+    for f in &faces {
+        if f.bad || f.indices.iter().any(|&i| i < 0 || i >= nv) {
+            return Err(format!("'{}': a face refers to a vertex that does not exist", path.display()));
+        }
+        for k in 1..f.indices.len().saturating_sub(1) {
+            push_triangle(&mut mesh, [f.indices[0] as u32, f.indices[k] as u32, f.indices[k + 1] as u32]);
+        }
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("candela-mesh-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p
+    }
+
+    const QUAD_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/4/1\n";
+
+    #[test]
+    fn obj_quads_become_two_triangles_with_normals_and_flipped_uv() {
+        let m = load_mesh(&tmp("quad.obj", QUAD_OBJ.as_bytes()), &Transform::IDENTITY).unwrap();
+        assert_eq!(m.indices.len(), 2);
+        assert_eq!(m.normals.len(), m.positions.len());
+        assert_eq!(m.uvs.len(), m.positions.len());
+        let i0 = m.indices[0][0] as usize;
+        assert_eq!(m.positions[i0], Point3::new(0.0, 0.0, 0.0));
+        assert_eq!(m.uvs[i0], Point2::new(0.0, 1.0));
+    }
+
+    fn ply_header(format: &str, nv: usize, nf: usize) -> String {
+        format!(
+            "ply\nformat {format} 1.0\nelement vertex {nv}\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nelement face {nf}\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+    }
+
+    #[test]
+    fn ply_ascii_and_binary_agree() {
+        let verts = [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let mut ascii = ply_header("ascii", 4, 1);
+        for v in verts {
+            ascii += &format!("{} {} {} 0 0 1\n", v[0], v[1], v[2]);
+        }
+        ascii += "4 0 1 2 3\n";
+        let a = load_mesh(&tmp("a.ply", ascii.as_bytes()), &Transform::IDENTITY).unwrap();
+        for (fmt, le) in [("binary_little_endian", true), ("binary_big_endian", false)] {
+            let mut b = ply_header(fmt, 4, 1).into_bytes();
+            let put_f = |b: &mut Vec<u8>, x: f32| b.extend(if le { x.to_le_bytes() } else { x.to_be_bytes() });
+            for v in verts {
+                for x in [v[0], v[1], v[2], 0.0, 0.0, 1.0] {
+                    put_f(&mut b, x);
+                }
+            }
+            b.push(4);
+            for i in [0i32, 1, 2, 3] {
+                b.extend(if le { i.to_le_bytes() } else { i.to_be_bytes() });
+            }
+            let m = load_mesh(&tmp(&format!("{fmt}.ply"), &b), &Transform::IDENTITY).unwrap();
+            assert_eq!(m, a, "{fmt}");
+        }
+        assert_eq!(a.indices, vec![[0, 1, 2], [0, 2, 3]]);
+        assert_eq!(a.normals.len(), 4);
+    }
+
+    #[test]
+    fn bad_files_are_errors_not_panics() {
+        let missing = load_mesh(Path::new("/nonexistent/x.obj"), &Transform::IDENTITY).unwrap_err();
+        assert!(missing.contains("x.obj"), "{missing}");
+        let mut bad_index = ply_header("ascii", 1, 1);
+        bad_index += "0 0 0 0 0 1\n3 0 1 2\n";
+        assert!(load_mesh(&tmp("bad.ply", bad_index.as_bytes()), &Transform::IDENTITY).unwrap_err().contains("does not exist"));
+        let huge = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nend_header\n";
+        assert!(load_mesh(&tmp("huge.ply", huge.as_bytes()), &Transform::IDENTITY).is_err());
+        assert!(load_mesh(&tmp("garbage.ply", b"not a ply"), &Transform::IDENTITY).is_err());
+        assert!(load_mesh(&tmp("t.stl", b"solid"), &Transform::IDENTITY).unwrap_err().contains("unknown mesh format"));
+        let truncated = ply_header("binary_little_endian", 4, 1).into_bytes();
+        assert!(load_mesh(&tmp("trunc.ply", &truncated), &Transform::IDENTITY).is_err());
+    }
+}
