@@ -91,9 +91,10 @@ pub struct ToneArgs {
     /// Tone mapping: the key value a (course default 0.18).
     #[arg(long, default_value_t = 0.18, value_parser = positive_f32)]
     pub factor: f32,
-    /// Tone mapping: the display gamma γ (course default 1.0).
-    #[arg(long, default_value_t = 1.0, value_parser = positive_f32)]
-    pub gamma: f32,
+    /// Tone mapping: the display gamma γ (default 1.0 for `convert`, as in the course; 2.2 for
+    /// `render` and `demo`).
+    #[arg(long, value_parser = positive_f32)]
+    pub gamma: Option<f32>,
     /// Tone mapping: the average luminosity ⟨l⟩ to use instead of the image's.
     #[arg(long, value_parser = positive_f32)]
     pub luminosity: Option<f32>,

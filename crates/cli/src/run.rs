@@ -15,8 +15,9 @@ use std::time::Instant;
 pub fn demo(args: RenderArgs) -> Result<()> {
     let outputs = outputs(&args, Path::new("demo.png"))?;
     let opts = load_options(&args)?;
-    let loaded = candela_scene::demo_scene(&opts).context("building the demo scene")?;
-    render_and_write(loaded, &args, &outputs)
+    let start = Instant::now();
+    let loaded = candela_scene::demo_scene(&opts).map_err(|e| anyhow::anyhow!("{e}"))?;
+    render_and_write(loaded, &args, &outputs, start.elapsed().as_secs_f64())
 }
 
 /// `candela render SCENE`.
@@ -25,8 +26,9 @@ pub fn render(a: SceneArgs) -> Result<()> {
     let outputs = outputs(&a.render, &default_out)?;
     let opts = load_options(&a.render)?;
     // Scene errors carry their own `file:line:col`; print them as they are.
+    let start = Instant::now();
     let loaded = candela_scene::load_scene(&a.scene, &opts).map_err(|e| anyhow::anyhow!("{e}"))?;
-    render_and_write(loaded, &a.render, &outputs)
+    render_and_write(loaded, &a.render, &outputs, start.elapsed().as_secs_f64())
 }
 
 /// The output files, checked before any work so that a bad extension costs nothing.
@@ -62,21 +64,24 @@ fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
     Ok(LoadOptions { defines, accel })
 }
 
-/// Builds the tone mapping for LDR outputs.
-pub fn tone_map(t: &ToneArgs) -> ToneMap {
+/// Builds the tone mapping for LDR outputs, with `default_gamma` unless `--gamma` is given.
+pub fn tone_map(t: &ToneArgs, default_gamma: f32) -> ToneMap {
     ToneMap {
         factor: t.factor,
         luminosity: t.luminosity,
-        encoding: if t.srgb { Encoding::Srgb } else { Encoding::Gamma(t.gamma) },
+        encoding: if t.srgb { Encoding::Srgb } else { Encoding::Gamma(t.gamma.unwrap_or(default_gamma)) },
     }
 }
 
-fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf]) -> Result<()> {
+/// The display gamma of rendered LDR images unless `--gamma` says otherwise.
+const RENDER_GAMMA: f32 = 2.2;
+
+fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf], load_seconds: f64) -> Result<()> {
     for w in &loaded.warnings {
         eprintln!("candela: warning: {w}");
     }
     let hints = &loaded.hints;
-    let name = args.integrator.as_deref().or(hints.integrator.as_deref()).unwrap_or("flat");
+    let name = args.integrator.as_deref().or(hints.integrator.as_deref()).unwrap_or("path");
     let kind = IntegratorKind::from_name(name).with_context(|| {
         format!("--integrator '{name}': unknown integrator (expected one of: {})", IntegratorKind::NAMES.join(", "))
     })?;
@@ -86,6 +91,11 @@ fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf])
         rr_depth: hints.rr_depth,
         hide_emitters: hints.hide_emitters,
     };
+    if matches!(kind, IntegratorKind::Path | IntegratorKind::Radiosity) {
+        for place in &loaded.local_model_terms {
+            eprintln!("candela: warning: {place} is a term of the local model, ignored by the {name} integrator");
+        }
+    }
     let integrator = kind
         .build(&loaded.scene, &integrator_settings)
         .map_err(|e| anyhow::anyhow!("--integrator '{name}': {e}"))?;
@@ -116,11 +126,15 @@ fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf])
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
 
-    let tone = tone_map(&args.tone);
+    let tone = tone_map(&args.tone, RENDER_GAMMA);
     for path in outputs {
         candela_imageio::write_image(path, &out.image, &tone).with_context(|| format!("writing '{}'", path.display()))?;
     }
     if args.stats {
+        eprintln!("scene loaded and built in {load_seconds:.3} s");
+        if let Some((triangles, bytes)) = loaded.mesh_stats {
+            eprintln!("meshes: {triangles} triangles, {bytes:.1} bytes per triangle");
+        }
         let s = &out.stats;
         let rays = s.total_rays();
         eprintln!(

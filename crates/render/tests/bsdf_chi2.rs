@@ -15,7 +15,7 @@ use candela_render::math::{Frame, Point2, Vec3};
 use candela_render::sampling::Pcg32;
 use candela_render::texture::Texture;
 use candela_render::Rgb;
-use chi2::{mean_and_error, sidak, Chi2, Grid, ALPHA};
+use chi2::{agrees_up_to_rounding, mean_and_error, rounding_spread, sidak, Chi2, Grid, ALPHA};
 
 /// Samples per χ² test and rows of its grid (2·rows columns).
 const SAMPLES: usize = 200_000;
@@ -514,10 +514,6 @@ fn materials() -> Vec<(String, Material)> {
     v
 }
 
-fn rel_close(a: f32, b: f32, rel: f32) -> bool {
-    (a - b).abs() <= rel * a.abs().max(b.abs()) + 1e-7
-}
-
 // For every non-delta model: the sample's weight is eval/pdf (the estimator f·cos/pdf is what
 // `sample` returns), its reported density is `pdf`, densities are never negative or NaN, and
 // wherever eval > 0 the density is > 0 (otherwise part of the integrand is never sampled and
@@ -554,15 +550,18 @@ fn weights_are_eval_over_pdf() {
             if s.delta {
                 continue;
             }
-            let (e, p) = (bsdf.eval(wo, s.wi), bsdf.pdf(wo, s.wi));
-            if !rel_close(s.pdf, p, 1e-3) {
+            // Relative 1e-3, or within what the f32 rounding of wi (local → world → local) can
+            // change at ill-conditioned pairs.
+            let p = bsdf.pdf(wo, s.wi);
+            if !agrees_up_to_rounding(s.pdf, s.wi, 1e-3, |d| bsdf.pdf(wo, d)) {
                 bad_pdf += 1;
                 example = format!("wo={wo:?} wi={:?}: sample pdf {} vs pdf {p}", s.wi, s.pdf);
             }
-            let w = e / p;
-            if !(rel_close(s.weight.r, w.r, 1e-3)
-                && rel_close(s.weight.g, w.g, 1e-3)
-                && rel_close(s.weight.b, w.b, 1e-3))
+            let w = bsdf.eval(wo, s.wi) / p;
+            let channel =
+                |c: usize| move |d: Vec3| (bsdf.eval(wo, d) / bsdf.pdf(wo, d)).to_array()[c];
+            if !(0..3)
+                .all(|c| agrees_up_to_rounding(s.weight.to_array()[c], s.wi, 1e-3, channel(c)))
             {
                 bad_weight += 1;
                 example = format!(
@@ -897,7 +896,7 @@ fn energy_conservation() {
             let wo = fr.to_world(local(th, 20.0));
             let (a, se) = albedo(&b, wo, n, seed(name) ^ th.to_bits() as u64);
             row += &format!(" {a:.4}±{se:.4}");
-            if a > 1.0 + 3.0 * se + slack {
+            if a > 1.0 + 3.0 * se + slack + 1e-5 {
                 failures.push(format!("{name} θo={th}°: albedo {a:.5} ± {se:.5} > 1"));
             }
             // Normalised Phong-type lobes: albedo 1 at normal incidence.
@@ -1017,8 +1016,6 @@ fn reciprocity() {
                 continue;
             }
             let (wo, wi) = (fr.to_world(a), fr.to_world(c));
-            let f_oi = b.eval(wo, wi) / c.z.abs();
-            let f_io = b.eval(wi, wo) / a.z.abs();
             // η of the medium on the side of each direction.
             let (eo, ei) = match eta {
                 Some(e) => (
@@ -1027,9 +1024,19 @@ fn reciprocity() {
                 ),
                 None => (1.0, 1.0),
             };
-            let (l, r) = (f_oi / (eo * eo), f_io / (ei * ei));
-            let ok = |x: f32, y: f32| (x - y).abs() <= 2e-3 * x.abs().max(y.abs()) + 1e-6;
-            if !(ok(l.r, r.r) && ok(l.g, r.g) && ok(l.b, r.b)) {
+            // f(wo, wi)/η_o² and f(wi, wo)/η_i², as functions of wi.
+            let left = |d: Vec3| b.eval(wo, d) / (fr.to_local(d).z.abs() * eo * eo);
+            let right = |d: Vec3| b.eval(d, wo) / (a.z.abs() * ei * ei);
+            let (l, r) = (left(wi), right(wi));
+            // Relative 2e-3, or within what the rounding of wi changes at ill-conditioned pairs
+            // (a microfacet seen at a grazing angle, where 1 − F has an infinite slope).
+            let ok = |c: usize| {
+                let (x, y) = (l.to_array()[c], r.to_array()[c]);
+                let spread = rounding_spread(wi, |d| left(d).to_array()[c])
+                    + rounding_spread(wi, |d| right(d).to_array()[c]);
+                (x - y).abs() <= 2e-3 * x.abs().max(y.abs()) + 1e-6 + 2.0 * spread
+            };
+            if !(ok(0) && ok(1) && ok(2)) {
                 bad += 1;
                 example = format!("wo={a:?} wi={c:?}: {l:?} vs {r:?}");
             }

@@ -6,11 +6,16 @@ use crate::error::{Pos, SceneError};
 use crate::lang::ast::{self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind};
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
-use candela_render::light::{Components, DistantLight, Environment, Falloff, HemisphereLight, Light, PointLight, SpotLight, SpotProfile};
+use candela_render::light::{
+    Components, DistantLight, Environment, Falloff, HemisphereLight, Light, PointLight, SpotLight,
+    SpotProfile,
+};
 use candela_render::material::{Distribution, Lobe, Material, MaterialId, Microfacet, Model};
 use candela_render::math::{Transform, Vec3};
 use candela_render::scene::{Emission, SceneBuilder};
-use candela_render::shape::{Cube, Csg, CsgNode, CsgOp, Mesh, Parallelogram, Plane, Polyhedron, Shape, Solid, Sphere};
+use candela_render::shape::{
+    Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polyhedron, Shape, Solid, Sphere,
+};
 use candela_render::texture::{Filter, Texture};
 use candela_render::{Rgb, Scene};
 use std::collections::HashMap;
@@ -26,10 +31,15 @@ pub struct BuildReport {
     pub triangles: usize,
     /// Bytes per mesh triangle (attributes, indices, primitive record), when there are meshes.
     pub bytes_per_triangle: Option<f64>,
+    /// Positions of `ambient_light`s and `components(…)`: terms of the local model only.
+    pub local_model_terms: Vec<String>,
 }
 
 /// Builds the render scene of `desc` with the acceleration structure `accel`.
-pub fn build_scene(desc: &SceneDescription, accel: AccelKind) -> Result<(Scene, BuildReport), SceneError> {
+pub fn build_scene(
+    desc: &SceneDescription,
+    accel: AccelKind,
+) -> Result<(Scene, BuildReport), SceneError> {
     let mut b = Builder {
         desc,
         scene: SceneBuilder::new(),
@@ -73,7 +83,11 @@ impl Builder<'_> {
     fn texture(&mut self, p: &ast::Pigment) -> Result<Texture, SceneError> {
         Ok(match &p.kind {
             PigmentKind::Uniform(c) => Texture::Uniform(*c),
-            PigmentKind::Checkered { color1, color2, steps } => Texture::Checkered {
+            PigmentKind::Checkered {
+                color1,
+                color2,
+                steps,
+            } => Texture::Checkered {
                 c1: *color1,
                 c2: *color2,
                 steps: *steps,
@@ -82,7 +96,9 @@ impl Builder<'_> {
                 let image = match self.images.get(&file.path) {
                     Some(i) => i.clone(),
                     None => {
-                        let img = candela_imageio::read_image(&file.path).map_err(|e| self.err(file.pos, format!("cannot load image '{}': {e}", file.name)))?;
+                        let img = candela_imageio::read_image(&file.path).map_err(|e| {
+                            self.err(file.pos, format!("cannot load image '{}': {e}", file.name))
+                        })?;
                         let img = Arc::new(img);
                         self.images.insert(file.path.clone(), img.clone());
                         img
@@ -103,10 +119,19 @@ impl Builder<'_> {
     fn materials(&mut self) -> Result<(), SceneError> {
         for m in &self.desc.materials {
             let model = match &m.brdf.kind {
-                BrdfKind::Diffuse { kd } => Model::Diffuse { reflectance: self.texture(kd)? },
-                BrdfKind::Specular { ks } => Model::Specular { reflectance: self.texture(ks)? },
-                BrdfKind::Phong { kd, ks, exponent } | BrdfKind::BlinnPhong { kd, ks, exponent } => Model::Phong {
-                    lobe: if matches!(m.brdf.kind, BrdfKind::Phong { .. }) { Lobe::Phong } else { Lobe::BlinnPhong },
+                BrdfKind::Diffuse { kd } => Model::Diffuse {
+                    reflectance: self.texture(kd)?,
+                },
+                BrdfKind::Specular { ks } => Model::Specular {
+                    reflectance: self.texture(ks)?,
+                },
+                BrdfKind::Phong { kd, ks, exponent }
+                | BrdfKind::BlinnPhong { kd, ks, exponent } => Model::Phong {
+                    lobe: if matches!(m.brdf.kind, BrdfKind::Phong { .. }) {
+                        Lobe::Phong
+                    } else {
+                        Lobe::BlinnPhong
+                    },
                     kd: self.texture(kd)?,
                     ks: self.texture(ks)?,
                     n: exponent.max(0.0),
@@ -131,7 +156,10 @@ impl Builder<'_> {
                 },
                 BrdfKind::Glass { ior, kt } => {
                     if !(*ior > 0.0) {
-                        return Err(self.err(m.brdf.pos, format!("the index of refraction must be positive, not {ior}")));
+                        return Err(self.err(
+                            m.brdf.pos,
+                            format!("the index of refraction must be positive, not {ior}"),
+                        ));
                     }
                     Model::Dielectric {
                         eta: *ior,
@@ -146,7 +174,10 @@ impl Builder<'_> {
                 PigmentKind::Uniform(c) if c.is_black() => None,
                 _ => {
                     let radiance = self.texture(&m.emission)?;
-                    Some(self.scene.add_emission(Emission { radiance, two_sided: true }))
+                    Some(self.scene.add_emission(Emission {
+                        radiance,
+                        two_sided: true,
+                    }))
                 }
             };
             self.materials.push((id, emission));
@@ -158,7 +189,9 @@ impl Builder<'_> {
         match &self.desc.camera {
             Some(c) => {
                 let cam = match c.projection {
-                    ast::Projection::Perspective => Camera::perspective(c.distance, c.aspect_ratio, c.transform),
+                    ast::Projection::Perspective => {
+                        Camera::perspective(c.distance, c.aspect_ratio, c.transform)
+                    }
                     ast::Projection::Orthogonal => Camera::orthogonal(c.aspect_ratio, c.transform),
                 };
                 self.scene.camera(cam);
@@ -171,7 +204,11 @@ impl Builder<'_> {
     }
 
     fn lights(&mut self) -> Result<(), SceneError> {
+        let here = |pos: Pos| format!("{}:{pos}", self.desc.source.path.display());
         for l in &self.desc.lights {
+            if l.components.is_some() {
+                self.report.local_model_terms.push(format!("{}: components(…)", here(l.pos)));
+            }
             let c = l.local_components();
             let components = Components {
                 ambient: c.ambient,
@@ -183,7 +220,9 @@ impl Builder<'_> {
                 if n > 0.0 && n.is_finite() {
                     Ok(v / n)
                 } else {
-                    Err(self.desc.error(l.pos, format!("the {what} must not be the zero vector")))
+                    Err(self
+                        .desc
+                        .error(l.pos, format!("the {what} must not be the zero vector")))
                 }
             };
             let att = |a: &Option<ast::Attenuation>| a.map(|a| [a.constant, a.linear, a.quadratic]);
@@ -225,7 +264,10 @@ impl Builder<'_> {
                     },
                     components,
                 ),
-                LightKind::Distant { direction, intensity } => Light::Distant(
+                LightKind::Distant {
+                    direction,
+                    intensity,
+                } => Light::Distant(
                     DistantLight {
                         direction: unit(*direction, "light direction")?,
                         irradiance: *intensity,
@@ -243,19 +285,30 @@ impl Builder<'_> {
             self.scene.add_light(light);
         }
         for a in &self.desc.ambient_lights {
+            self.report.local_model_terms.push(format!("{}: ambient_light", here(a.pos)));
             self.scene.add_ambient(a.intensity);
         }
         for e in &self.desc.environments {
             let tex = self.texture(&e.pigment)?;
             let t = self.check_transform(&e.transform, e.pos)?;
-            self.scene.add_light(Light::Environment(Environment::new(tex, t)));
+            self.scene
+                .add_light(Light::Environment(Environment::new(tex, t)));
         }
         Ok(())
     }
 
     fn check_transform(&self, t: &Transform, pos: Pos) -> Result<Transform, SceneError> {
-        let finite = t.m.m.iter().flatten().chain(t.inv.m.iter().flatten()).all(|x| x.is_finite());
-        if finite && t.is_consistent(1e-3 * (1.0 + t.m.m.iter().flatten().fold(0f32, |a, x| a.max(x.abs())))) {
+        let finite =
+            t.m.m
+                .iter()
+                .flatten()
+                .chain(t.inv.m.iter().flatten())
+                .all(|x| x.is_finite());
+        if finite
+            && t.is_consistent(
+                1e-3 * (1.0 + t.m.m.iter().flatten().fold(0f32, |a, x| a.max(x.abs()))),
+            )
+        {
             Ok(*t)
         } else {
             Err(self.err(pos, "the transformation is singular (a scaling by zero?)"))
@@ -266,9 +319,15 @@ impl Builder<'_> {
         if let Some(m) = self.meshes.get(&file.path) {
             return Ok(m.clone());
         }
-        let m = crate::mesh::load_mesh(&file.path, &Transform::IDENTITY).map_err(|e| self.err(file.pos, e))?;
+        let m = crate::mesh::load_mesh(&file.path, &Transform::IDENTITY)
+            .map_err(|e| self.err(file.pos, e))?;
         if m.is_empty() {
-            self.report.warnings.push(format!("{}:{}: mesh '{}' has no triangles", self.desc.source.path.display(), file.pos, file.name));
+            self.report.warnings.push(format!(
+                "{}:{}: mesh '{}' has no triangles",
+                self.desc.source.path.display(),
+                file.pos,
+                file.name
+            ));
         }
         let m = Arc::new(m);
         self.meshes.insert(file.path.clone(), m.clone());
@@ -280,23 +339,37 @@ impl Builder<'_> {
     }
 
     /// Adds `shape`, moved by `extra` (the placements of enclosing instances), to the world.
-    fn add_shape(&mut self, shape: &ast::Shape, extra: &Transform, depth: u32) -> Result<(), SceneError> {
+    fn add_shape(
+        &mut self,
+        shape: &ast::Shape,
+        extra: &Transform,
+        depth: u32,
+    ) -> Result<(), SceneError> {
         if depth > MAX_NESTING {
             return Err(self.err(shape.pos, "shapes are nested too deeply"));
         }
         let place = |b: &Self, t: &Transform| b.check_transform(&(*extra * *t), shape.pos);
         match &shape.kind {
-            ShapeKind::Sphere { material, transform } => {
+            ShapeKind::Sphere {
+                material,
+                transform,
+            } => {
                 let (m, e) = self.props(material);
                 let t = place(self, transform)?;
                 self.scene.add_shape(Shape::Sphere(Sphere::new(t)), m, e);
             }
-            ShapeKind::Plane { material, transform } => {
+            ShapeKind::Plane {
+                material,
+                transform,
+            } => {
                 let (m, e) = self.props(material);
                 let t = place(self, transform)?;
                 self.scene.add_shape(Shape::Plane(Plane::new(t)), m, e);
             }
-            ShapeKind::Box { material, transform } => {
+            ShapeKind::Box {
+                material,
+                transform,
+            } => {
                 let (m, e) = self.props(material);
                 let t = place(self, transform)?;
                 self.scene.add_shape(Shape::Cube(Cube::new(t)), m, e);
@@ -310,7 +383,10 @@ impl Builder<'_> {
                 };
                 let [a, b, c] = [mesh.positions[0], mesh.positions[1], mesh.positions[2]];
                 if !((b - a).cross(c - a).norm() > 0.0) {
-                    return Err(self.err(shape.pos, "the triangle is degenerate (its vertices are aligned)"));
+                    return Err(self.err(
+                        shape.pos,
+                        "the triangle is degenerate (its vertices are aligned)",
+                    ));
                 }
                 mesh.props.material = m;
                 mesh.props.emission = e;
@@ -323,8 +399,17 @@ impl Builder<'_> {
                 edge2,
             } => {
                 let (m, e) = self.props(material);
-                let p = Parallelogram::new(extra.point(*origin), extra.vector(*edge1), extra.vector(*edge2))
-                    .ok_or_else(|| self.err(shape.pos, "the parallelogram is degenerate (its edges are parallel or zero)"))?;
+                let p = Parallelogram::new(
+                    extra.point(*origin),
+                    extra.vector(*edge1),
+                    extra.vector(*edge2),
+                )
+                .ok_or_else(|| {
+                    self.err(
+                        shape.pos,
+                        "the parallelogram is degenerate (its edges are parallel or zero)",
+                    )
+                })?;
                 self.scene.add_shape(Shape::Parallelogram(p), m, e);
             }
             ShapeKind::Polyhedron { material, .. } => {
@@ -332,7 +417,11 @@ impl Builder<'_> {
                 let p = self.polyhedron(shape, extra)?;
                 self.scene.add_shape(Shape::Polyhedron(p), m, e);
             }
-            ShapeKind::Mesh { material, transform, file } => {
+            ShapeKind::Mesh {
+                material,
+                transform,
+                file,
+            } => {
                 let (m, e) = self.props(material);
                 let t = place(self, transform)?;
                 let mut mesh = self.mesh(file)?.transformed(&t);
@@ -346,7 +435,9 @@ impl Builder<'_> {
                 let csg = Csg::new(nodes).ok_or_else(|| self.err(shape.pos, "invalid CSG tree"))?;
                 self.scene.add_shape(Shape::Csg(Box::new(csg)), 0, None);
             }
-            ShapeKind::Instance { index, transform, .. } => {
+            ShapeKind::Instance {
+                index, transform, ..
+            } => {
                 let t = place(self, transform)?;
                 let named = &self.desc.named_shape(*index).shape;
                 self.add_shape(named, &t, depth + 1)?;
@@ -362,19 +453,32 @@ impl Builder<'_> {
     }
 
     fn polyhedron(&self, shape: &ast::Shape, extra: &Transform) -> Result<Polyhedron, SceneError> {
-        let ShapeKind::Polyhedron { transform, half_spaces, .. } = &shape.kind else {
+        let ShapeKind::Polyhedron {
+            transform,
+            half_spaces,
+            ..
+        } = &shape.kind
+        else {
             unreachable!("called on polyhedra only")
         };
         let t = self.check_transform(&(*extra * *transform), shape.pos)?;
         let hs: Vec<(Vec3, f32)> = half_spaces.iter().map(|h| (h.normal, h.d)).collect();
         Polyhedron::new(t, &hs).map_err(|e| match e {
-            candela_render::shape::PolyhedronError::BadNormal(i) => self.err(half_spaces[i].pos, e.to_string()),
+            candela_render::shape::PolyhedronError::BadNormal(i) => {
+                self.err(half_spaces[i].pos, e.to_string())
+            }
             _ => self.err(shape.pos, e.to_string()),
         })
     }
 
     /// Appends the CSG nodes of `shape` (operands first) and returns the index of its root.
-    fn csg(&mut self, shape: &ast::Shape, extra: &Transform, nodes: &mut Vec<CsgNode>, depth: u32) -> Result<u32, SceneError> {
+    fn csg(
+        &mut self,
+        shape: &ast::Shape,
+        extra: &Transform,
+        nodes: &mut Vec<CsgNode>,
+        depth: u32,
+    ) -> Result<u32, SceneError> {
         if depth > MAX_NESTING {
             return Err(self.err(shape.pos, "shapes are nested too deeply"));
         }
@@ -436,4 +540,3 @@ impl Builder<'_> {
         }
     }
 }
-

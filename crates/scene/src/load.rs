@@ -49,13 +49,20 @@ pub struct LoadedScene {
     pub warnings: Vec<String>,
     /// Triangles in meshes and the memory they take per triangle.
     pub mesh_stats: Option<(usize, f64)>,
+    /// Where the scene uses terms of the local model only (ambient light, per-light components),
+    /// which the physically based integrators ignore.
+    pub local_model_terms: Vec<String>,
 }
 
 /// Loads a scene file: Mitsuba 3 XML when the extension is `.xml`, the candela language
 /// otherwise.
 pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::new(path, format!("cannot read the scene file: {e}")))?;
-    let is_xml = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::new(path, format!("cannot read the scene file: {e}")))?;
+    let is_xml = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
     if is_xml {
         crate::mitsuba::load_mitsuba(path, &text, opts)
     } else {
@@ -64,7 +71,10 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneE
 }
 
 /// The `-d` overrides as numbers (the candela language only has float variables).
-fn numeric_defines(path: &Path, defines: &[(String, String)]) -> Result<HashMap<String, f32>, SceneError> {
+fn numeric_defines(
+    path: &Path,
+    defines: &[(String, String)],
+) -> Result<HashMap<String, f32>, SceneError> {
     let mut out = HashMap::new();
     for (name, value) in defines {
         match value.trim().parse::<f32>() {
@@ -72,14 +82,22 @@ fn numeric_defines(path: &Path, defines: &[(String, String)]) -> Result<HashMap<
                 out.insert(name.clone(), v);
             }
             _ => {
-                return Err(SceneError::new(path, format!("--define {name}={value}: '{value}' is not a finite number")));
+                return Err(SceneError::new(
+                    path,
+                    format!("--define {name}={value}: '{value}' is not a finite number"),
+                ));
             }
         }
     }
     Ok(out)
 }
 
-fn load_candela(path: &Path, text: &str, opts: &LoadOptions, hints: RenderHints) -> Result<LoadedScene, SceneError> {
+fn load_candela(
+    path: &Path,
+    text: &str,
+    opts: &LoadOptions,
+    hints: RenderHints,
+) -> Result<LoadedScene, SceneError> {
     let defines = numeric_defines(path, &opts.defines)?;
     let desc = parse_scene(text, path, &defines)?;
     let (scene, report) = build_scene(&desc, opts.accel)?;
@@ -88,6 +106,7 @@ fn load_candela(path: &Path, text: &str, opts: &LoadOptions, hints: RenderHints)
         hints,
         warnings: report.warnings,
         mesh_stats: report.bytes_per_triangle.map(|b| (report.triangles, b)),
+        local_model_terms: report.local_model_terms,
     })
 }
 

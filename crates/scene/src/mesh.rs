@@ -15,14 +15,25 @@ use std::path::Path;
 /// Loads `path` (`.obj` or `.ply`, case-insensitive) and moves it by `transform`.
 /// The error is a message for the user (the caller adds the position).
 pub fn load_mesh(path: &Path, transform: &Transform) -> Result<Mesh, String> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     let mut mesh = match ext.as_deref() {
         Some("obj") => load_obj(path)?,
         Some("ply") => load_ply(path)?,
-        _ => return Err(format!("'{}': unknown mesh format (use .obj or .ply)", path.display())),
+        _ => {
+            return Err(format!(
+                "'{}': unknown mesh format (use .obj or .ply)",
+                path.display()
+            ))
+        }
     };
     if mesh.positions.iter().any(|p| !p.is_finite()) {
-        return Err(format!("'{}': a vertex position is not a finite number", path.display()));
+        return Err(format!(
+            "'{}': a vertex position is not a finite number",
+            path.display()
+        ));
     }
     if !transform.is_identity() {
         mesh = mesh.transformed(transform);
@@ -32,7 +43,8 @@ pub fn load_mesh(path: &Path, transform: &Transform) -> Result<Mesh, String> {
 
 /// Bytes used by a mesh per triangle (attributes, indices and the scene's primitive record).
 pub fn bytes_per_triangle(m: &Mesh) -> f64 {
-    let bytes = m.positions.len() * 12 + m.normals.len() * 12 + m.uvs.len() * 8 + m.indices.len() * 12;
+    let bytes =
+        m.positions.len() * 12 + m.normals.len() * 12 + m.uvs.len() * 8 + m.indices.len() * 12;
     // Each triangle also takes a 12-byte primitive reference in the scene.
     bytes as f64 / m.indices.len().max(1) as f64 + 12.0
 }
@@ -62,16 +74,31 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
         let m = model.mesh;
         let base = mesh.positions.len() as u32;
         let nv = (m.positions.len() / 3) as u32;
-        mesh.positions.extend(m.positions.chunks_exact(3).map(|p| Point3::new(p[0], p[1], p[2])));
+        mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|p| Point3::new(p[0], p[1], p[2])),
+        );
         if all_normals {
-            mesh.normals.extend(m.normals.chunks_exact(3).map(|n| Normal3::new(n[0], n[1], n[2])));
+            mesh.normals.extend(
+                m.normals
+                    .chunks_exact(3)
+                    .map(|n| Normal3::new(n[0], n[1], n[2])),
+            );
         }
         if all_uvs {
-            mesh.uvs.extend(m.texcoords.chunks_exact(2).map(|t| Point2::new(t[0], 1.0 - t[1])));
+            mesh.uvs.extend(
+                m.texcoords
+                    .chunks_exact(2)
+                    .map(|t| Point2::new(t[0], 1.0 - t[1])),
+            );
         }
         for tri in m.indices.chunks_exact(3) {
             if tri.iter().any(|&i| i >= nv) {
-                return Err(format!("'{}': a face refers to a vertex that does not exist", path.display()));
+                return Err(format!(
+                    "'{}': a face refers to a vertex that does not exist",
+                    path.display()
+                ));
             }
             push_triangle(&mut mesh, [base + tri[0], base + tri[1], base + tri[2]]);
         }
@@ -108,7 +135,9 @@ impl PlyVertex {
             "nx" => (self.n[0], self.has) = (v, self.has | HAS_N),
             "ny" => self.n[1] = v,
             "nz" => self.n[2] = v,
-            "u" | "s" | "texture_u" | "texture_s" => (self.uv[0], self.has) = (v, self.has | HAS_UV),
+            "u" | "s" | "texture_u" | "texture_s" => {
+                (self.uv[0], self.has) = (v, self.has | HAS_UV)
+            }
             "v" | "t" | "texture_v" | "texture_t" => self.uv[1] = v,
             _ => return PropertyAccessResult::Ignored,
         }
@@ -192,41 +221,76 @@ fn load_ply(path: &Path) -> Result<Mesh, String> {
     let mut reader = Reader::new(std::io::BufReader::new(file));
     let vparser = Parser::<PlyVertex>::new();
     let fparser = Parser::<PlyFace>::new();
-    let header = vparser.read_header(&mut reader).map_err(|e| read_error(path, e))?;
+    let header = vparser
+        .read_header(&mut reader)
+        .map_err(|e| read_error(path, e))?;
     let mut vertices: Vec<PlyVertex> = Vec::new();
     let mut faces: Vec<PlyFace> = Vec::new();
     for (name, def) in &header.elements {
         // Every element takes at least one byte (binary) or one character (ASCII).
         if def.count as u64 > file_len {
-            return Err(format!("'{}': the header announces {} {name} elements, more than the file holds", path.display(), def.count));
+            return Err(format!(
+                "'{}': the header announces {} {name} elements, more than the file holds",
+                path.display(),
+                def.count
+            ));
         }
         match name.as_str() {
-            "vertex" => vertices = vparser.read_payload_for_element(&mut reader, def, &header).map_err(|e| read_error(path, e))?,
-            "face" => faces = fparser.read_payload_for_element(&mut reader, def, &header).map_err(|e| read_error(path, e))?,
+            "vertex" => {
+                vertices = vparser
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(|e| read_error(path, e))?
+            }
+            "face" => {
+                faces = fparser
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(|e| read_error(path, e))?
+            }
             // Other elements must still be consumed to reach the ones after them.
             _ => {
-                fparser.read_payload_for_element(&mut reader, def, &header).map_err(|e| read_error(path, e))?;
+                fparser
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(|e| read_error(path, e))?;
             }
         }
     }
     let nv = vertices.len() as i64;
     let mut mesh = Mesh {
-        positions: vertices.iter().map(|v| Point3::new(v.p[0], v.p[1], v.p[2])).collect(),
+        positions: vertices
+            .iter()
+            .map(|v| Point3::new(v.p[0], v.p[1], v.p[2]))
+            .collect(),
         ..Default::default()
     };
     if !vertices.is_empty() && vertices.iter().all(|v| v.has & HAS_N != 0) {
-        mesh.normals = vertices.iter().map(|v| Normal3::new(v.n[0], v.n[1], v.n[2])).collect();
+        mesh.normals = vertices
+            .iter()
+            .map(|v| Normal3::new(v.n[0], v.n[1], v.n[2]))
+            .collect();
     }
     if !vertices.is_empty() && vertices.iter().all(|v| v.has & HAS_UV != 0) {
-        mesh.uvs = vertices.iter().map(|v| Point2::new(v.uv[0], v.uv[1])).collect();
+        mesh.uvs = vertices
+            .iter()
+            .map(|v| Point2::new(v.uv[0], v.uv[1]))
+            .collect();
     }
     mesh.indices.reserve(faces.len());
     for f in &faces {
         if f.bad || f.indices.iter().any(|&i| i < 0 || i >= nv) {
-            return Err(format!("'{}': a face refers to a vertex that does not exist", path.display()));
+            return Err(format!(
+                "'{}': a face refers to a vertex that does not exist",
+                path.display()
+            ));
         }
         for k in 1..f.indices.len().saturating_sub(1) {
-            push_triangle(&mut mesh, [f.indices[0] as u32, f.indices[k] as u32, f.indices[k + 1] as u32]);
+            push_triangle(
+                &mut mesh,
+                [
+                    f.indices[0] as u32,
+                    f.indices[k] as u32,
+                    f.indices[k + 1] as u32,
+                ],
+            );
         }
     }
     Ok(mesh)
@@ -265,7 +329,12 @@ mod tests {
 
     #[test]
     fn ply_ascii_and_binary_agree() {
-        let verts = [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let verts = [
+            [0f32, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ];
         let mut ascii = ply_header("ascii", 4, 1);
         for v in verts {
             ascii += &format!("{} {} {} 0 0 1\n", v[0], v[1], v[2]);
@@ -274,7 +343,9 @@ mod tests {
         let a = load_mesh(&tmp("a.ply", ascii.as_bytes()), &Transform::IDENTITY).unwrap();
         for (fmt, le) in [("binary_little_endian", true), ("binary_big_endian", false)] {
             let mut b = ply_header(fmt, 4, 1).into_bytes();
-            let put_f = |b: &mut Vec<u8>, x: f32| b.extend(if le { x.to_le_bytes() } else { x.to_be_bytes() });
+            let put_f = |b: &mut Vec<u8>, x: f32| {
+                b.extend(if le { x.to_le_bytes() } else { x.to_be_bytes() })
+            };
             for v in verts {
                 for x in [v[0], v[1], v[2], 0.0, 0.0, 1.0] {
                     put_f(&mut b, x);
@@ -297,11 +368,17 @@ mod tests {
         assert!(missing.contains("x.obj"), "{missing}");
         let mut bad_index = ply_header("ascii", 1, 1);
         bad_index += "0 0 0 0 0 1\n3 0 1 2\n";
-        assert!(load_mesh(&tmp("bad.ply", bad_index.as_bytes()), &Transform::IDENTITY).unwrap_err().contains("does not exist"));
+        assert!(
+            load_mesh(&tmp("bad.ply", bad_index.as_bytes()), &Transform::IDENTITY)
+                .unwrap_err()
+                .contains("does not exist")
+        );
         let huge = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nend_header\n";
         assert!(load_mesh(&tmp("huge.ply", huge.as_bytes()), &Transform::IDENTITY).is_err());
         assert!(load_mesh(&tmp("garbage.ply", b"not a ply"), &Transform::IDENTITY).is_err());
-        assert!(load_mesh(&tmp("t.stl", b"solid"), &Transform::IDENTITY).unwrap_err().contains("unknown mesh format"));
+        assert!(load_mesh(&tmp("t.stl", b"solid"), &Transform::IDENTITY)
+            .unwrap_err()
+            .contains("unknown mesh format"));
         let truncated = ply_header("binary_little_endian", 4, 1).into_bytes();
         assert!(load_mesh(&tmp("trunc.ply", &truncated), &Transform::IDENTITY).is_err());
     }

@@ -3,7 +3,7 @@
 //! Build: the resolution follows the primitive count, about [`CELLS_PER_PRIM`] cells per
 //! primitive, with cells as close to cubes as the box allows (an axis with too little extent
 //! gets one cell and the others share the budget), at most [`MAX_RES`] per axis. Every primitive
-//! is referenced from each cell its box, grown by the [margin](super::margin), overlaps
+//! is referenced from each cell its box, grown by the margin (`accel::margin`), overlaps
 //! (inclusive, so a primitive touching a cell boundary goes into both cells). The cell lists are
 //! stored in CSR form: `offsets[c]..offsets[c + 1]` indexes `prims`. When the references would
 //! exceed [`MAX_REFS_PER_PRIM`] per primitive (many huge primitives), the resolution is halved
@@ -14,9 +14,11 @@
 //! from its entry into the grid, in order. The parameter of the next boundary on each axis is
 //! recomputed from the boundary's coordinate at every step (no accumulated increments). A hit
 //! found in a cell may lie in a later cell, so the walk only stops once the next cell starts
-//! beyond [`t_limit`](super::t_limit) of the best hit; shadow rays stop at the first hit.
+//! beyond `t_limit` of the best hit; shadow rays stop at the first hit.
 
-use super::{clip, inflate, inv_dir, margin, t_limit, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor};
+use super::{
+    clip, inflate, inv_dir, margin, t_limit, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor,
+};
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray, Vec3};
 use crate::scene::Geometry;
@@ -54,7 +56,15 @@ impl Grid {
         let mut res = resolution(&bounds, prims.len());
         loop {
             let mut g = Self::empty(bounds, res);
-            let refs: u64 = boxes.iter().map(|b| g.range(b).iter().map(|&(lo, hi)| (hi - lo + 1) as u64).product::<u64>()).sum();
+            let refs: u64 = boxes
+                .iter()
+                .map(|b| {
+                    g.range(b)
+                        .iter()
+                        .map(|&(lo, hi)| (hi - lo + 1) as u64)
+                        .product::<u64>()
+                })
+                .sum();
             let cells: u64 = res.iter().map(|&r| r as u64).product();
             if refs > MAX_REFS_PER_PRIM * prims.len() as u64 + (1 << 20) && cells > 1 {
                 res = res.map(|r| (r / 2).max(1));
@@ -329,7 +339,10 @@ mod tests {
         let flat = Bounds3::new(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 1.0, 1e-6));
         let r = resolution(&flat, 200);
         assert_eq!(r[2], 1);
-        assert!(r[0] * r[1] >= 600 && r[0] * r[1] <= 1000 && r[0] > r[1], "{r:?}");
+        assert!(
+            r[0] * r[1] >= 600 && r[0] * r[1] <= 1000 && r[0] > r[1],
+            "{r:?}"
+        );
         assert_eq!(resolution(&cube, 100_000_000), [MAX_RES; 3]);
     }
 
@@ -337,8 +350,16 @@ mod tests {
     fn two_triangles_in_different_cells() {
         // Two unit triangles facing +z, far apart along x.
         let g = triangles(&[
-            [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0)],
-            [Point3::new(9.0, 0.0, 1.0), Point3::new(10.0, 0.0, 1.0), Point3::new(9.0, 1.0, 1.0)],
+            [
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(0.0, 1.0, 0.0),
+            ],
+            [
+                Point3::new(9.0, 0.0, 1.0),
+                Point3::new(10.0, 0.0, 1.0),
+                Point3::new(9.0, 1.0, 1.0),
+            ],
         ]);
         let gr = grid(&g);
         assert!(gr.cell_count() > 1);
@@ -352,7 +373,11 @@ mod tests {
         let r = Ray::new(Point3::new(-5.0, 0.2, 0.5), Vec3::X);
         assert!(gr.intersect(&g, &r, &mut st).is_none());
         assert!(st.nodes > 0 && st.prim_tests > 0);
-        check_against_list(&g, |g, r, st| gr.intersect(g, r, st), |g, r, st| gr.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| gr.intersect(g, r, st),
+            |g, r, st| gr.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -368,17 +393,29 @@ mod tests {
         let short = Ray { tmax: 3.0, ..r };
         assert!(gr.intersect(&g, &short, &mut st).is_none());
         assert!(!gr.occluded(&g, &short, &mut st));
-        check_against_list(&g, |g, r, st| gr.intersect(g, r, st), |g, r, st| gr.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| gr.intersect(g, r, st),
+            |g, r, st| gr.occluded(g, r, st),
+        );
     }
 
     #[test]
     fn a_primitive_spanning_many_cells_is_found_at_the_nearer_cell() {
         // A long thin triangle along x, and small ones behind it: the long one must win where
         // it is in front, though it is also listed in every later cell.
-        let mut tris = vec![[Point3::new(-10.0, -1.0, 0.0), Point3::new(10.0, -1.0, 0.0), Point3::new(-10.0, 1.0, 0.0)]];
+        let mut tris = vec![[
+            Point3::new(-10.0, -1.0, 0.0),
+            Point3::new(10.0, -1.0, 0.0),
+            Point3::new(-10.0, 1.0, 0.0),
+        ]];
         for i in 0..20 {
             let x = -10.0 + i as f32;
-            tris.push([Point3::new(x, -1.0, -1.0), Point3::new(x + 1.0, -1.0, -1.0), Point3::new(x, 1.0, -1.0)]);
+            tris.push([
+                Point3::new(x, -1.0, -1.0),
+                Point3::new(x + 1.0, -1.0, -1.0),
+                Point3::new(x, 1.0, -1.0),
+            ]);
         }
         let g = triangles(&tris);
         let gr = grid(&g);
@@ -386,7 +423,11 @@ mod tests {
         let mut st = RayStats::default();
         let r = Ray::new(Point3::new(-9.0, -0.5, 3.0), Vec3::new(0.1, 0.0, -1.0));
         assert_eq!(gr.intersect(&g, &r, &mut st).unwrap().prim, 0);
-        check_against_list(&g, |g, r, st| gr.intersect(g, r, st), |g, r, st| gr.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| gr.intersect(g, r, st),
+            |g, r, st| gr.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -394,14 +435,26 @@ mod tests {
         let g = triangles(&[]);
         let gr = grid(&g);
         let mut st = RayStats::default();
-        assert!(gr.intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st).is_none());
-        let t = [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0)];
+        assert!(gr
+            .intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
+            .is_none());
+        let t = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        ];
         for n in [1, 7, 300] {
             let g = triangles(&vec![t; n]);
             let gr = grid(&g);
-            let h = gr.intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st).unwrap();
+            let h = gr
+                .intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st)
+                .unwrap();
             assert_eq!((h.prim, h.t), (0, 1.0));
-            check_against_list(&g, |g, r, st| gr.intersect(g, r, st), |g, r, st| gr.occluded(g, r, st));
+            check_against_list(
+                &g,
+                |g, r, st| gr.intersect(g, r, st),
+                |g, r, st| gr.occluded(g, r, st),
+            );
         }
     }
 }

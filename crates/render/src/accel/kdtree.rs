@@ -15,22 +15,27 @@
 //! axes (binned SAH: O(N) per node, so the build is O(N log N) and stays fast at millions of
 //! triangles; pbrt's exact sweep re-sorts at every node). As in pbrt, a split that costs more
 //! than a leaf is tolerated twice on a path ("bad refines"), and a node is a leaf when no plane
-//! lies strictly inside it. Primitive boxes are grown by the [margin](super::margin) first; a
-//! primitive goes below when its grown box starts before the plane and above when it ends after
-//! it (both when it straddles). Subtrees of more than [`PARALLEL_THRESHOLD`] primitives are
-//! built in parallel.
+//! lies strictly inside it. Classification is exact, as in pbrt: a primitive goes below when
+//! its box starts before the plane, above when it ends after it (both when it straddles; a box
+//! lying in the plane goes below), so triangles that only touch the plane at a shared vertex are
+//! not duplicated. Subtrees of more than [`PARALLEL_THRESHOLD`] primitives are built in
+//! parallel.
 //!
 //! Layout: 8-byte nodes as in pbrt: an interior node holds the split position, the axis and the
 //! offset of its above child relative to the node (the below child follows the node); a leaf
 //! holds its primitive count and either the one primitive's id or an offset into the
 //! primitive-index array.
 //!
-//! Traversal: front to back over the ray's interval clipped to the tree's bounds, with a fixed
-//! stack of the far children still to visit and their intervals (pbrt's recursive interval
-//! subdivision). The child on the ray's side before the plane parameter is visited first; the
-//! other one only when the plane is crossed inside the interval. A hit found in a leaf may lie
-//! beyond it, so the traversal stops only at a node entered beyond
-//! [`t_limit`](super::t_limit) of the best hit; shadow rays stop at the first hit.
+//! Traversal: front to back over the ray's interval clipped to the tree's bounds (grown by the
+//! margin), with a fixed stack of the far children still to visit and their intervals (pbrt's
+//! recursive interval subdivision). For exactness each splitting plane is *thick*: the child
+//! below is entered over `x ≤ split + m` and the one above over `x ≥ split − m` (m the margin,
+//! `accel::margin`), so a hit that round-off puts a hair outside its primitive's box, or a ray
+//! that touches a plane exactly where a primitive ends, still reaches a leaf holding the
+//! primitive. The child the ray is in first is visited first; the other one only when the ray
+//! reaches its thickened region inside the interval. A hit found in a leaf may lie beyond it, so
+//! a node entered beyond `t_limit` of the best hit is skipped (entries are only nearly ordered
+//! with thick planes, so the stack is still emptied); shadow rays stop at the first hit.
 
 use super::{clip, inflate, inv_dir, margin, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor};
 use crate::interaction::Hit;
@@ -175,7 +180,15 @@ impl KdTree {
             ids: &ids,
         };
         let mut out = Out::default();
-        build(&ctx, &mut out, scene, (0..prims.len() as u32).collect(), depth, 0, &mut Vec::new());
+        build(
+            &ctx,
+            &mut out,
+            scene,
+            (0..prims.len() as u32).collect(),
+            depth,
+            0,
+            &mut Vec::new(),
+        );
         Self {
             bounds: inflate(scene, 2.0 * m),
             margin: m,
@@ -191,7 +204,11 @@ impl KdTree {
 
     /// Number of primitive references in the leaves.
     pub fn reference_count(&self) -> usize {
-        self.nodes.iter().filter(|n| n.is_leaf()).map(|n| n.high() as usize).sum()
+        self.nodes
+            .iter()
+            .filter(|n| n.is_leaf())
+            .map(|n| n.high() as usize)
+            .sum()
     }
 
     /// Largest depth of a leaf (the root has depth 0).
@@ -251,7 +268,12 @@ impl KdTree {
                     // x ≤ split + m, above is x ≥ split − m.
                     let (before, after, before_end, after_start) = if par[a] {
                         let (b, f) = (o[a] <= split + m, o[a] >= split - m);
-                        (below, above, if b { f32::INFINITY } else { f32::NEG_INFINITY }, if f { f32::NEG_INFINITY } else { f32::INFINITY })
+                        (
+                            below,
+                            above,
+                            if b { f32::INFINITY } else { f32::NEG_INFINITY },
+                            if f { f32::NEG_INFINITY } else { f32::INFINITY },
+                        )
                     } else if pos[a] {
                         (below, above, cross(a, split + m), cross(a, split - m))
                     } else {
@@ -270,7 +292,11 @@ impl KdTree {
                         continue;
                     }
                     // Both (or NaN: both, over the whole interval).
-                    let (ta, tb) = if go_before { (tmin.max(after_start), tmax.min(before_end)) } else { (tmin, tmax) };
+                    let (ta, tb) = if go_before {
+                        (tmin.max(after_start), tmax.min(before_end))
+                    } else {
+                        (tmin, tmax)
+                    };
                     stack[sp] = (after as u32, ta, tmax);
                     sp += 1;
                     node = before;
@@ -314,13 +340,25 @@ impl KdTree {
 }
 
 /// Builds the subtree over `list` inside `bounds` into `out`, depth-first.
-fn build(ctx: &Ctx, out: &mut Out, bounds: Bounds3, list: Vec<u32>, depth: u32, bad: u32, scratch: &mut Vec<u64>) {
+fn build(
+    ctx: &Ctx,
+    out: &mut Out,
+    bounds: Bounds3,
+    list: Vec<u32>,
+    depth: u32,
+    bad: u32,
+    scratch: &mut Vec<u64>,
+) {
     let n = list.len();
     if n <= MAX_PRIMS || depth == 0 {
         out.leaf(ctx, &list);
         return;
     }
-    let split = if n > SWEEP_MAX { binned(ctx, &bounds, &list) } else { swept(ctx, &bounds, &list, scratch) };
+    let split = if n > SWEEP_MAX {
+        binned(ctx, &bounds, &list)
+    } else {
+        swept(ctx, &bounds, &list, scratch)
+    };
     let leaf_cost = ISECT_COST * n as f32;
     let Some((cost, axis, t)) = split else {
         out.leaf(ctx, &list);
@@ -340,7 +378,11 @@ fn build(ctx: &Ctx, out: &mut Out, bounds: Bounds3, list: Vec<u32>, depth: u32, 
             b.min[axis] < t || b.max[axis] <= t
         })
         .collect();
-    let above: Vec<u32> = list.iter().copied().filter(|&p| ctx.boxes[p as usize].max[axis] > t).collect();
+    let above: Vec<u32> = list
+        .iter()
+        .copied()
+        .filter(|&p| ctx.boxes[p as usize].max[axis] > t)
+        .collect();
     drop(list);
     let (mut bb, mut ab) = (bounds.max.to_array(), bounds.min.to_array());
     bb[axis] = t;
@@ -385,7 +427,8 @@ fn sah(bounds: &Bounds3, axis: usize, t: f32, nb: u32, na: u32) -> f32 {
     let below = 2.0 * (d0 * d1 + (t - bounds.min[axis]) * (d0 + d1));
     let above = 2.0 * (d0 * d1 + (bounds.max[axis] - t) * (d0 + d1));
     let eb = if nb == 0 || na == 0 { EMPTY_BONUS } else { 0.0 };
-    TRAVERSAL_COST + ISECT_COST * (1.0 - eb) * (below * inv_area * nb as f32 + above * inv_area * na as f32)
+    TRAVERSAL_COST
+        + ISECT_COST * (1.0 - eb) * (below * inv_area * nb as f32 + above * inv_area * na as f32)
 }
 
 /// A sort key ordering edges by position, starts before ends at the same position.
@@ -399,7 +442,11 @@ fn edge_key(t: f32, end: bool) -> u64 {
 #[inline]
 fn edge_pos(key: u64) -> f32 {
     let ordered = (key >> 1) as u32;
-    f32::from_bits(if ordered >> 31 == 1 { ordered & !(1 << 31) } else { !ordered })
+    f32::from_bits(if ordered >> 31 == 1 {
+        ordered & !(1 << 31)
+    } else {
+        !ordered
+    })
 }
 
 /// The best split by an exact sweep over the sorted edges (pbrt-v3): the axis of largest
@@ -508,20 +555,37 @@ mod tests {
     #[test]
     fn two_triangles_are_split_apart() {
         let g = triangles(&[
-            [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0)],
-            [Point3::new(9.0, 0.0, 1.0), Point3::new(10.0, 0.0, 1.0), Point3::new(9.0, 1.0, 1.0)],
+            [
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(0.0, 1.0, 0.0),
+            ],
+            [
+                Point3::new(9.0, 0.0, 1.0),
+                Point3::new(10.0, 0.0, 1.0),
+                Point3::new(9.0, 1.0, 1.0),
+            ],
         ]);
         let k = kdtree(&g);
         assert!(k.node_count() >= 3);
         assert_eq!(k.reference_count(), 2);
         let mut st = RayStats::default();
-        let h = k.intersect(&g, &Ray::new(Point3::new(9.2, 0.2, 5.0), -Vec3::Z), &mut st).unwrap();
+        let h = k
+            .intersect(&g, &Ray::new(Point3::new(9.2, 0.2, 5.0), -Vec3::Z), &mut st)
+            .unwrap();
         assert_eq!((h.prim, h.t), (1, 4.0));
         // Through both, along x at their height: the first is hit from behind the second.
         let r = Ray::new(Point3::new(20.0, 0.2, 0.0), Vec3::new(-1.0, 0.0, 0.05));
-        assert_eq!(k.intersect(&g, &r, &mut st), crate::accel::List::new(&g).intersect(&g, &r, &mut st));
+        assert_eq!(
+            k.intersect(&g, &r, &mut st),
+            crate::accel::List::new(&g).intersect(&g, &r, &mut st)
+        );
         assert!(st.nodes > 0 && st.prim_tests > 0);
-        check_against_list(&g, |g, r, st| k.intersect(g, r, st), |g, r, st| k.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| k.intersect(g, r, st),
+            |g, r, st| k.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -532,7 +596,11 @@ mod tests {
         let r = Ray::new(Point3::new(0.5, 0.5, 0.5), Vec3::X);
         assert_eq!(k.intersect(&g, &r, &mut st).unwrap().t, 3.5);
         assert!(!k.occluded(&g, &Ray { tmax: 3.0, ..r }, &mut st));
-        check_against_list(&g, |g, r, st| k.intersect(g, r, st), |g, r, st| k.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| k.intersect(g, r, st),
+            |g, r, st| k.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -540,17 +608,35 @@ mod tests {
         let mut tris: Vec<[Point3; 3]> = (0..60)
             .map(|i| {
                 let x = i as f32;
-                [Point3::new(x, 0.0, 0.0), Point3::new(x + 0.5, 0.0, 0.0), Point3::new(x, 0.5, 0.0)]
+                [
+                    Point3::new(x, 0.0, 0.0),
+                    Point3::new(x + 0.5, 0.0, 0.0),
+                    Point3::new(x, 0.5, 0.0),
+                ]
             })
             .collect();
-        tris.push([Point3::new(-1.0, -1.0, 1.0), Point3::new(65.0, -1.0, 1.0), Point3::new(-1.0, 2.0, 1.0)]);
+        tris.push([
+            Point3::new(-1.0, -1.0, 1.0),
+            Point3::new(65.0, -1.0, 1.0),
+            Point3::new(-1.0, 2.0, 1.0),
+        ]);
         let g = triangles(&tris);
         let k = kdtree(&g);
         assert!(k.reference_count() > tris.len());
         let mut st = RayStats::default();
-        let h = k.intersect(&g, &Ray::new(Point3::new(0.2, 0.1, 3.0), Vec3::new(0.05, 0.0, -1.0)), &mut st).unwrap();
+        let h = k
+            .intersect(
+                &g,
+                &Ray::new(Point3::new(0.2, 0.1, 3.0), Vec3::new(0.05, 0.0, -1.0)),
+                &mut st,
+            )
+            .unwrap();
         assert_eq!(h.prim, 60);
-        check_against_list(&g, |g, r, st| k.intersect(g, r, st), |g, r, st| k.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| k.intersect(g, r, st),
+            |g, r, st| k.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -559,16 +645,31 @@ mod tests {
         let mut tris = Vec::new();
         for i in 0..40 {
             for j in 0..40 {
-                let (u, v) = (i as f32 / 40.0 * 6.283, j as f32 / 40.0 * 3.1);
-                let p = |u: f32, v: f32| Point3::new(3.0 * u.cos() * v.sin(), 3.0 * u.sin() * v.sin(), 3.0 * v.cos());
+                let (u, v) = (
+                    i as f32 / 40.0 * std::f32::consts::TAU,
+                    j as f32 / 40.0 * 3.1,
+                );
+                let p = |u: f32, v: f32| {
+                    Point3::new(
+                        3.0 * u.cos() * v.sin(),
+                        3.0 * u.sin() * v.sin(),
+                        3.0 * v.cos(),
+                    )
+                };
                 tris.push([p(u, v), p(u + 0.16, v), p(u, v + 0.08)]);
             }
         }
         assert!(tris.len() > SWEEP_MAX);
         let g = triangles(&tris);
         let k = kdtree(&g);
-        assert!(k.depth() > 8 && k.depth() <= 8 + (1.3 * (tris.len() as f32).log2()).round() as usize);
-        check_against_list(&g, |g, r, st| k.intersect(g, r, st), |g, r, st| k.occluded(g, r, st));
+        assert!(
+            k.depth() > 8 && k.depth() <= 8 + (1.3 * (tris.len() as f32).log2()).round() as usize
+        );
+        check_against_list(
+            &g,
+            |g, r, st| k.intersect(g, r, st),
+            |g, r, st| k.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -576,45 +677,27 @@ mod tests {
         let g = triangles(&[]);
         let k = kdtree(&g);
         let mut st = RayStats::default();
-        assert!(k.intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st).is_none());
+        assert!(k
+            .intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
+            .is_none());
         assert!(!k.occluded(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st));
-        let t = [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0)];
+        let t = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        ];
         for n in [1, 2, 300] {
             let g = triangles(&vec![t; n]);
             let k = kdtree(&g);
-            let h = k.intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st).unwrap();
+            let h = k
+                .intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st)
+                .unwrap();
             assert_eq!((h.prim, h.t), (0, 1.0));
-            check_against_list(&g, |g, r, st| k.intersect(g, r, st), |g, r, st| k.occluded(g, r, st));
+            check_against_list(
+                &g,
+                |g, r, st| k.intersect(g, r, st),
+                |g, r, st| k.occluded(g, r, st),
+            );
         }
-    }
-}
-#[cfg(test)]
-mod tmp_analysis {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn leaf_histogram() {
-        let mut tris = Vec::new();
-        let (nu, nv) = (400, 200);
-        let p = |i: usize, j: usize| {
-            let (u, v) = (i as f32 / nu as f32 * 6.2831855, j as f32 / nv as f32 * 3.1415927);
-            crate::math::Point3::new(10.0 * u.cos() * v.sin(), 10.0 * u.sin() * v.sin(), 10.0 * v.cos())
-        };
-        for j in 0..nv { for i in 0..nu { tris.push([p(i,j), p(i+1,j), p(i+1,j+1)]); tris.push([p(i,j), p(i+1,j+1), p(i,j+1)]); } }
-        let g = super::super::test_scenes::triangles(&tris);
-        let k = KdTree::build(&super::super::build_prims(&g));
-        let mut hist = std::collections::BTreeMap::new();
-        fn walk(nodes: &[KdNode], i: usize, d: usize, hist: &mut std::collections::BTreeMap<(usize,u32), usize>) {
-            let n = nodes[i];
-            if n.is_leaf() { *hist.entry((d, n.high().min(9))).or_insert(0) += 1; return; }
-            walk(nodes, i + 1, d + 1, hist); walk(nodes, i + n.high() as usize, d + 1, hist);
-        }
-        walk(&k.nodes, 0, 0, &mut hist);
-        let mut by_count = std::collections::BTreeMap::new();
-        let mut by_depth = std::collections::BTreeMap::new();
-        for ((d, c), n) in hist { *by_count.entry(c).or_insert(0) += n; *by_depth.entry(d).or_insert(0usize) += n * c as usize; }
-        println!("tris {} nodes {} refs {} depth {}", tris.len(), k.node_count(), k.reference_count(), k.depth());
-        println!("leaves by count {by_count:?}");
-        println!("refs by depth {by_depth:?}");
     }
 }

@@ -6,12 +6,15 @@
 //! Unbounded primitives (planes) are kept outside and tested by the scene.
 //!
 //! The spatial subdivisions ([`KdTree`], [`Grid`], [`Octree`]) reference a primitive from every
-//! cell its box overlaps, so a hit found in one cell may lie in a later one. They stay exact by
-//! two safeguards shared here: primitive boxes are grown by a small [`margin`] before they are
-//! assigned to cells (a primitive touching a cell boundary, or lying within round-off of it,
-//! goes into both cells), and traversal continues while the next cell's entry `t` is at most
-//! [`t_limit`] of the best hit (a little beyond it), so hits at equal `t` in later cells are still
-//! tested and the tie goes to the smaller primitive id.
+//! cell its box overlaps, so a hit found in one cell may lie in a later one, and a computed hit
+//! may lie a little outside its primitive's box. They stay exact by the same two safeguards:
+//! a small `margin` (dozens of ULPs of the scene's size) by which a primitive's box reaches
+//! into neighbouring cells (the grid and the octree grow the boxes before assigning them to
+//! cells, inclusive of boundaries; the kd-tree, which splits at box edges, instead thickens its
+//! splitting planes by it during traversal, so that triangles sharing a vertex on a plane are not
+//! duplicated), and traversal continues while the next cell's entry `t` is at most `t_limit` of
+//! the best hit, so hits at equal `t` in later cells are still tested and the tie goes to the
+//! smaller primitive id. A recently tested primitive is not tested again (a small mailbox).
 
 mod bvh;
 mod grid;
@@ -89,8 +92,8 @@ pub fn build_prims(geometry: &Geometry) -> Vec<BuildPrim> {
         .collect()
 }
 
-/// Relative slack of [`t_limit`].
-const T_SLACK: f32 = 1.0 / 4096.0;
+/// Relative slack of `t_limit`.
+const T_SLACK: f32 = 1.0 / 65536.0;
 
 /// The largest cell-entry parameter that may still hold a hit at `t` or closer: `t` plus a
 /// relative slack that covers the round-off of the cell-boundary parameters.
@@ -140,8 +143,16 @@ pub(crate) fn clip(b: &Bounds3, ray: &Ray, inv: Vec3) -> Option<(f32, f32)> {
             }
             continue;
         }
-        let ta = if b.min[a] == o { 0.0 } else { (b.min[a] - o) * inv[a] };
-        let tb = if b.max[a] == o { 0.0 } else { (b.max[a] - o) * inv[a] };
+        let ta = if b.min[a] == o {
+            0.0
+        } else {
+            (b.min[a] - o) * inv[a]
+        };
+        let tb = if b.max[a] == o {
+            0.0
+        } else {
+            (b.max[a] - o) * inv[a]
+        };
         let (near, far) = if ta <= tb { (ta, tb) } else { (tb, ta) };
         let far = far * (1.0 + 2.0 * crate::math::GAMMA3);
         t0 = if near > t0 { near } else { t0 };
@@ -156,6 +167,39 @@ pub(crate) fn inv_dir(d: Vec3) -> Vec3 {
     Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z)
 }
 
+/// The ids of the last [`MAILBOX`] primitives tested by one ray (a ring, on the stack):
+/// spatial subdivisions list a primitive in several cells, and a neighbouring cell need not
+/// test it again. Skipping is exact: a second test with the ray's interval since shortened
+/// cannot produce a closer hit than the first.
+struct Mailbox {
+    ids: [u32; MAILBOX],
+    next: usize,
+}
+
+/// Size of the mailbox.
+const MAILBOX: usize = 8;
+
+impl Mailbox {
+    #[inline(always)]
+    fn new() -> Self {
+        Self {
+            ids: [u32::MAX; MAILBOX],
+            next: 0,
+        }
+    }
+
+    /// True when `id` was tested recently; otherwise records it.
+    #[inline(always)]
+    fn seen(&mut self, id: u32) -> bool {
+        if self.ids.contains(&id) {
+            return true;
+        }
+        self.ids[self.next % MAILBOX] = id;
+        self.next += 1;
+        false
+    }
+}
+
 /// What a spatial subdivision does with the primitive list of each cell (leaf) it visits,
 /// front to back.
 pub(crate) trait CellVisitor {
@@ -167,13 +211,14 @@ pub(crate) trait CellVisitor {
 
 /// Closest-hit queries: keeps the best hit, shortens the ray to one ULP past it (so ties at the
 /// same `t` are still tested and go to the smaller id), and asks for cells entered up to
-/// [`t_limit`] of it.
+/// `t_limit` of it.
 pub(crate) struct ClosestVisitor<'a> {
     geometry: &'a Geometry,
     sr: ShearedRay,
     ray: Ray,
     best: Option<Hit>,
     tests: u64,
+    mailbox: Mailbox,
 }
 
 impl<'a> ClosestVisitor<'a> {
@@ -185,6 +230,7 @@ impl<'a> ClosestVisitor<'a> {
             ray: *ray,
             best: None,
             tests: 0,
+            mailbox: Mailbox::new(),
         }
     }
 
@@ -201,6 +247,9 @@ impl CellVisitor for ClosestVisitor<'_> {
     #[inline(always)]
     fn cell(&mut self, prims: &[u32]) -> bool {
         for &id in prims {
+            if self.mailbox.seen(id) {
+                continue;
+            }
             self.tests += 1;
             if let Some(h) = self.geometry.intersect_prim(id, &self.ray, &self.sr) {
                 if closest(&mut self.best, h) {
@@ -227,6 +276,7 @@ pub(crate) struct AnyVisitor<'a> {
     ray: &'a Ray,
     found: bool,
     tests: u64,
+    mailbox: Mailbox,
 }
 
 impl<'a> AnyVisitor<'a> {
@@ -238,6 +288,7 @@ impl<'a> AnyVisitor<'a> {
             ray,
             found: false,
             tests: 0,
+            mailbox: Mailbox::new(),
         }
     }
 
@@ -254,8 +305,15 @@ impl CellVisitor for AnyVisitor<'_> {
     #[inline(always)]
     fn cell(&mut self, prims: &[u32]) -> bool {
         for &id in prims {
+            if self.mailbox.seen(id) {
+                continue;
+            }
             self.tests += 1;
-            if self.geometry.intersect_prim(id, self.ray, &self.sr).is_some() {
+            if self
+                .geometry
+                .intersect_prim(id, self.ray, &self.sr)
+                .is_some()
+            {
                 self.found = true;
                 return false;
             }
@@ -352,7 +410,11 @@ pub(crate) mod test_scenes {
             mesh.positions.extend_from_slice(t);
             mesh.indices.push([k, k + 1, k + 2]);
         }
-        let meshes = if mesh.is_empty() { Vec::new() } else { vec![mesh] };
+        let meshes = if mesh.is_empty() {
+            Vec::new()
+        } else {
+            vec![mesh]
+        };
         Geometry::new(Vec::new(), meshes)
     }
 
@@ -363,14 +425,40 @@ pub(crate) mod test_scenes {
             shape,
             props: SurfaceProps::new(0),
         };
-        let pg = |p: Point3, v: Vec3, w: Vec3| obj(Shape::Parallelogram(Parallelogram::new(p, v, w).unwrap()));
-        let sphere = |c: Vec3, r: f32| obj(Shape::Sphere(Sphere::new(Transform::translation(c) * Transform::scaling(Vec3::new(r, r, r)))));
+        let pg = |p: Point3, v: Vec3, w: Vec3| {
+            obj(Shape::Parallelogram(Parallelogram::new(p, v, w).unwrap()))
+        };
+        let sphere = |c: Vec3, r: f32| {
+            obj(Shape::Sphere(Sphere::new(
+                Transform::translation(c) * Transform::scaling(Vec3::new(r, r, r)),
+            )))
+        };
         let objects = vec![
-            pg(Point3::new(4.0, -2.0, -2.0), Vec3::new(0.0, 4.0, 0.0), Vec3::new(0.0, 0.0, 4.0)),
-            pg(Point3::new(-4.0, -4.0, 0.0), Vec3::new(8.0, 0.0, 0.0), Vec3::new(0.0, 8.0, 0.0)),
-            pg(Point3::new(-4.0, 0.0, -4.0), Vec3::new(8.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 8.0)),
-            pg(Point3::new(-4.0, 0.0, -4.0), Vec3::new(8.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 8.0)),
-            pg(Point3::new(-1.0, -1.0, 1.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 2.0, 0.0)),
+            pg(
+                Point3::new(4.0, -2.0, -2.0),
+                Vec3::new(0.0, 4.0, 0.0),
+                Vec3::new(0.0, 0.0, 4.0),
+            ),
+            pg(
+                Point3::new(-4.0, -4.0, 0.0),
+                Vec3::new(8.0, 0.0, 0.0),
+                Vec3::new(0.0, 8.0, 0.0),
+            ),
+            pg(
+                Point3::new(-4.0, 0.0, -4.0),
+                Vec3::new(8.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, 8.0),
+            ),
+            pg(
+                Point3::new(-4.0, 0.0, -4.0),
+                Vec3::new(8.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, 8.0),
+            ),
+            pg(
+                Point3::new(-1.0, -1.0, 1.0),
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(0.0, 2.0, 0.0),
+            ),
             sphere(Vec3::new(2.0, 2.0, 2.0), 0.5),
             sphere(Vec3::new(-2.0, -2.0, -2.0), 1.5),
             sphere(Vec3::new(-2.0, -2.0, -2.0), 1.5),
@@ -396,7 +484,13 @@ pub(crate) mod test_scenes {
             (b.centroid(), d.x.max(d.y).max(d.z).max(1.0))
         };
         let mut rng = Pcg32::new(7, 3);
-        let mut pt = |s: f32| c + Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * (2.0 * s * r);
+        let mut pt = |s: f32| {
+            c + Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            ) * (2.0 * s * r)
+        };
         let mut rays = Vec::new();
         for i in 0..3000 {
             let o = pt(if i % 3 == 0 { 0.4 } else { 1.5 });
@@ -440,7 +534,11 @@ pub(crate) mod test_scenes {
             let a = list.intersect(g, ray, &mut st);
             let h = intersect(g, ray, &mut st);
             assert_eq!(a, h, "{ray:?}");
-            assert_eq!(list.occluded(g, ray, &mut st), occluded(g, ray, &mut st), "{ray:?}");
+            assert_eq!(
+                list.occluded(g, ray, &mut st),
+                occluded(g, ray, &mut st),
+                "{ray:?}"
+            );
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Octree (`--accel octree`): a cube around the scene, split recursively into eight octants.
 //!
 //! Build: the root is the cube around the scene's box (grown by the
-//! [margin](super::margin)). A node holding more than [`MAX_LEAF`] primitives is split at its
+//! margin (`accel::margin`)). A node holding more than [`MAX_LEAF`] primitives is split at its
 //! centre into eight octants, down to [`MAX_DEPTH`]; a primitive goes into every octant its box
 //! (grown by the margin) overlaps, boundaries included. A split whose octants would hold
 //! [`DUPLICATION_LIMIT`] times the node's primitives or more (large, overlapping or identical
@@ -16,9 +16,11 @@
 //! node's interval flips one bit of the octant; the octants so visited are pushed far to near
 //! with their parameter intervals. Empty octants are skipped. A hit found in an octant may lie
 //! in a later one, so traversal stops only at a node entered beyond
-//! [`t_limit`](super::t_limit) of the best hit; shadow rays stop at the first hit.
+//! `t_limit` of the best hit; shadow rays stop at the first hit.
 
-use super::{clip, inflate, inv_dir, margin, t_limit, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor};
+use super::{
+    clip, inflate, inv_dir, margin, t_limit, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor,
+};
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Point3, Ray};
 use crate::scene::Geometry;
@@ -155,7 +157,8 @@ impl Builder<'_> {
             first: self.prims.len() as u32,
             count: n as u32,
         };
-        self.prims.extend(list.iter().map(|&p| self.ids[p as usize]));
+        self.prims
+            .extend(list.iter().map(|&p| self.ids[p as usize]));
     }
 }
 
@@ -272,7 +275,11 @@ impl Octree {
                     o[a] >= c[a]
                 } else {
                     // An origin on the plane crosses it at 0 (never 0·∞ = NaN).
-                    tm[a] = if c[a] == o[a] { 0.0 } else { (c[a] - o[a]) * inv[a] };
+                    tm[a] = if c[a] == o[a] {
+                        0.0
+                    } else {
+                        (c[a] - o[a]) * inv[a]
+                    };
                     if pos[a] {
                         e.t0 >= tm[a]
                     } else {
@@ -346,7 +353,11 @@ mod tests {
         (0..n)
             .map(|i| {
                 let x = i as f32;
-                [Point3::new(x, 0.0, 0.0), Point3::new(x + 0.5, 0.0, 0.0), Point3::new(x, 0.5, 0.0)]
+                [
+                    Point3::new(x, 0.0, 0.0),
+                    Point3::new(x + 0.5, 0.0, 0.0),
+                    Point3::new(x, 0.5, 0.0),
+                ]
             })
             .collect()
     }
@@ -361,9 +372,15 @@ mod tests {
         let h = o.intersect(&g, &r, &mut st).unwrap();
         assert_eq!((h.prim, h.t), (30, 2.0));
         // Along the row, just above it: misses everything.
-        assert!(o.intersect(&g, &Ray::new(Point3::new(-1.0, 0.1, 0.1), Vec3::X), &mut st).is_none());
+        assert!(o
+            .intersect(&g, &Ray::new(Point3::new(-1.0, 0.1, 0.1), Vec3::X), &mut st)
+            .is_none());
         assert!(st.nodes > 0 && st.prim_tests > 0);
-        check_against_list(&g, |g, r, st| o.intersect(g, r, st), |g, r, st| o.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| o.intersect(g, r, st),
+            |g, r, st| o.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -374,21 +391,39 @@ mod tests {
         let r = Ray::new(Point3::new(0.5, 0.5, 0.5), Vec3::X);
         assert_eq!(o.intersect(&g, &r, &mut st).unwrap().t, 3.5);
         assert!(!o.occluded(&g, &Ray { tmax: 3.0, ..r }, &mut st));
-        check_against_list(&g, |g, r, st| o.intersect(g, r, st), |g, r, st| o.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| o.intersect(g, r, st),
+            |g, r, st| o.occluded(g, r, st),
+        );
     }
 
     #[test]
     fn a_primitive_spanning_many_octants_is_found_at_the_nearer_one() {
         let mut tris = row(40);
         // A long triangle in front of the whole row.
-        tris.push([Point3::new(-1.0, -1.0, 1.0), Point3::new(45.0, -1.0, 1.0), Point3::new(-1.0, 2.0, 1.0)]);
+        tris.push([
+            Point3::new(-1.0, -1.0, 1.0),
+            Point3::new(45.0, -1.0, 1.0),
+            Point3::new(-1.0, 2.0, 1.0),
+        ]);
         let g = triangles(&tris);
         let o = octree(&g);
         assert!(o.reference_count() > tris.len());
         let mut st = RayStats::default();
-        let h = o.intersect(&g, &Ray::new(Point3::new(0.2, 0.1, 3.0), Vec3::new(0.05, 0.0, -1.0)), &mut st).unwrap();
+        let h = o
+            .intersect(
+                &g,
+                &Ray::new(Point3::new(0.2, 0.1, 3.0), Vec3::new(0.05, 0.0, -1.0)),
+                &mut st,
+            )
+            .unwrap();
         assert_eq!(h.prim, 40);
-        check_against_list(&g, |g, r, st| o.intersect(g, r, st), |g, r, st| o.occluded(g, r, st));
+        check_against_list(
+            &g,
+            |g, r, st| o.intersect(g, r, st),
+            |g, r, st| o.occluded(g, r, st),
+        );
     }
 
     #[test]
@@ -396,15 +431,27 @@ mod tests {
         let g = triangles(&[]);
         let o = octree(&g);
         let mut st = RayStats::default();
-        assert!(o.intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st).is_none());
+        assert!(o
+            .intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
+            .is_none());
         assert!(!o.occluded(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st));
-        let t = [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0)];
+        let t = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        ];
         for n in [1, 9, 300] {
             let g = triangles(&vec![t; n]);
             let o = octree(&g);
-            let h = o.intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st).unwrap();
+            let h = o
+                .intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st)
+                .unwrap();
             assert_eq!((h.prim, h.t), (0, 1.0));
-            check_against_list(&g, |g, r, st| o.intersect(g, r, st), |g, r, st| o.occluded(g, r, st));
+            check_against_list(
+                &g,
+                |g, r, st| o.intersect(g, r, st),
+                |g, r, st| o.occluded(g, r, st),
+            );
         }
     }
 }

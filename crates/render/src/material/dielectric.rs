@@ -101,9 +101,21 @@ pub fn sample_rough(mf: &Microfacet, eta: f32, r: Rgb, t: Rgb, wo: Vec3, u1: f32
     }
     let wo_up = if wo.z < 0.0 { -wo } else { wo };
     let m = mf.sample(wo_up, u2);
+    // Only microfacets facing wo scatter it (Beckmann samples all normals, not only the visible
+    // ones).
+    if wo.dot(m) * wo.z <= 0.0 {
+        return None;
+    }
     let (f, cos_t, _, eta_ti) = fresnel_dielectric(wo.dot(m), eta);
-    let wi = if u1 < f { reflect(wo, m) } else { refract(wo, m, cos_t, eta_ti) };
-    if u1 >= f && cos_t == 0.0 {
+    let reflection = u1 < f;
+    if !reflection && cos_t == 0.0 {
+        return None;
+    }
+    let wi = if reflection { reflect(wo, m) } else { refract(wo, m, cos_t, eta_ti) };
+    // A reflection must stay on wo's side and a refraction must cross the surface (as in
+    // Mitsuba): otherwise `pdf_rough` would see the pair as the other event through another
+    // microfacet, and the sample would land where the density does not account for it.
+    if (wi.z * wo.z > 0.0) != reflection {
         return None;
     }
     let pdf = pdf_rough(mf, eta, wo, wi);

@@ -1,0 +1,198 @@
+//! Rows of the form-factor matrix, computed on demand by the chosen method, and statistics of
+//! their quality (row sums, reciprocity).
+//!
+//! A row holds the non-zero F_ij of one patch i as sorted column indices and f32 values
+//! (8 bytes per entry). Gauss–Seidel computes and keeps all rows (in parallel); progressive
+//! refinement asks for the rows of its shooting patches only and keeps them in a bounded cache,
+//! so it never needs the N² matrix.
+
+use super::hemicube::{Hemicube, HemicubeScratch, Raster};
+use super::mesh::Meshing;
+use super::{raycast, FormFactorMethod};
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// One row of the form-factor matrix.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Row {
+    pub cols: Vec<u32>,
+    pub vals: Vec<f32>,
+}
+
+impl Row {
+    /// Σ_j F_ij.
+    pub fn sum(&self) -> f64 {
+        self.vals.iter().map(|&v| v as f64).sum()
+    }
+
+    /// F_ij (0 when absent).
+    pub fn get(&self, j: u32) -> f32 {
+        self.cols.binary_search(&j).map(|k| self.vals[k]).unwrap_or(0.0)
+    }
+
+    /// Memory held, in bytes.
+    pub fn bytes(&self) -> usize {
+        self.cols.capacity() * 4 + self.vals.capacity() * 4 + std::mem::size_of::<Row>()
+    }
+}
+
+/// A dense accumulator for one row (f64 sums) with the list of touched columns.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RowAcc {
+    dense: Vec<f64>,
+    touched: Vec<u32>,
+}
+
+impl RowAcc {
+    /// An accumulator for `n` patches.
+    pub fn new(n: usize) -> Self {
+        Self {
+            dense: vec![0.0; n],
+            touched: Vec::new(),
+        }
+    }
+
+    /// Adds `v` to column `j`.
+    #[inline]
+    pub fn add(&mut self, j: u32, v: f64) {
+        let d = &mut self.dense[j as usize];
+        if *d == 0.0 {
+            self.touched.push(j);
+        }
+        *d += v;
+        if *d == 0.0 {
+            // Keep the entry marked as touched.
+            *d = f64::MIN_POSITIVE;
+        }
+    }
+
+    /// The row, resetting the accumulator.
+    pub fn finish(&mut self) -> Row {
+        self.touched.sort_unstable();
+        let mut row = Row {
+            cols: Vec::with_capacity(self.touched.len()),
+            vals: Vec::with_capacity(self.touched.len()),
+        };
+        for &j in &self.touched {
+            let v = std::mem::take(&mut self.dense[j as usize]);
+            if v > 1e-30 {
+                row.cols.push(j);
+                row.vals.push(v as f32);
+            }
+        }
+        self.touched.clear();
+        row
+    }
+}
+
+/// Computes rows with one method.
+pub(crate) struct Engine<'a> {
+    scene: &'a Scene,
+    mesh: &'a Meshing,
+    method: FormFactorMethod,
+    hemicube: Option<(Hemicube, Raster)>,
+    rays: u32,
+    seed: u64,
+    emitters: Option<Vec<u32>>,
+    traced: Vec<bool>,
+}
+
+/// Per-thread scratch memory of an [`Engine`].
+pub(crate) struct Scratch {
+    acc: RowAcc,
+    hc: Option<HemicubeScratch>,
+}
+
+impl<'a> Engine<'a> {
+    /// An engine for `mesh` (whose patches are final).
+    pub fn new(scene: &'a Scene, mesh: &'a Meshing, method: FormFactorMethod, resolution: u32, rays: u32, seed: u64) -> Self {
+        let hemicube = (method == FormFactorMethod::Hemicube).then(|| (Hemicube::new(resolution), Raster::new(mesh)));
+        let emitters = if method == FormFactorMethod::RayCast { raycast::emitter_list(mesh) } else { None };
+        Self {
+            scene,
+            mesh,
+            method,
+            hemicube,
+            rays,
+            seed,
+            emitters,
+            traced: raycast::traced_materials(scene),
+        }
+    }
+
+    /// Fresh scratch memory for one thread.
+    pub fn scratch(&self) -> Scratch {
+        Scratch {
+            acc: RowAcc::new(self.mesh.patches.len()),
+            hc: self.hemicube.as_ref().map(|(h, _)| h.scratch()),
+        }
+    }
+
+    /// Row `i`.
+    pub fn row(&self, i: u32, s: &mut Scratch) -> Row {
+        match (&self.hemicube, &mut s.hc) {
+            (Some((h, raster)), Some(hs)) => h.row(raster, self.mesh, i, hs, &mut s.acc),
+            _ => raycast::row(self.scene, self.mesh, &self.traced, i, self.rays, self.seed, self.emitters.as_deref(), &mut s.acc),
+        }
+    }
+
+    /// The rows of `ids`, computed in parallel (the result does not depend on the thread count).
+    pub fn rows(&self, ids: &[u32]) -> Vec<Row> {
+        ids.par_iter().map_init(|| self.scratch(), |s, &i| self.row(i, s)).collect()
+    }
+
+    /// The method.
+    pub fn method(&self) -> FormFactorMethod {
+        self.method
+    }
+}
+
+/// Quality statistics of a set of rows.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct RowStats {
+    pub rows: u64,
+    pub sum_min: f64,
+    pub sum_max: f64,
+    pub sum_total: f64,
+}
+
+impl RowStats {
+    /// Adds a row's sum.
+    pub fn add(&mut self, s: f64) {
+        if self.rows == 0 {
+            self.sum_min = s;
+            self.sum_max = s;
+        } else {
+            self.sum_min = self.sum_min.min(s);
+            self.sum_max = self.sum_max.max(s);
+        }
+        self.sum_total += s;
+        self.rows += 1;
+    }
+}
+
+/// Reciprocity of the pairs whose both rows are known: (Σ|A_i F_ij − A_j F_ji| / Σ(A_i F_ij +
+/// A_j F_ji), the largest relative difference among pairs whose larger F is ≥ 0.01, pairs).
+pub(crate) fn reciprocity(rows: &[Option<&Row>], area: &[f64]) -> (f64, f64, u64) {
+    let (mut num, mut den, mut worst, mut pairs) = (0f64, 0f64, 0f64, 0u64);
+    for (i, ri) in rows.iter().enumerate() {
+        let Some(ri) = ri else { continue };
+        for (&j, &fij) in ri.cols.iter().zip(&ri.vals) {
+            let j = j as usize;
+            let Some(Some(rj)) = rows.get(j) else { continue };
+            let fji = rj.get(i as u32);
+            // Each pair once: from the smaller index, or from i when j's row does not have i.
+            if j < i && fji > 0.0 {
+                continue;
+            }
+            let (a, b) = (area[i] * fij as f64, area[j] * fji as f64);
+            num += (a - b).abs();
+            den += a + b;
+            pairs += 1;
+            if (fij as f64).max(fji as f64) >= 0.01 && a + b > 0.0 {
+                worst = worst.max((a - b).abs() / (0.5 * (a + b)));
+            }
+        }
+    }
+    (if den > 0.0 { num / den } else { 0.0 }, worst, pairs)
+}

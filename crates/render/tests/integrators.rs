@@ -1,0 +1,150 @@
+//! Integrators against analytic scenes: the furnace tests of the rendering equation.
+
+use candela_render::accel::AccelKind;
+use candela_render::camera::Camera;
+use candela_render::integrator::{Integrator, Path, Whitted};
+use candela_render::light::{Environment, Light};
+use candela_render::material::{Material, Model};
+use candela_render::math::{Point3, Transform, Vec3};
+use candela_render::render::{render, RenderSettings};
+use candela_render::scene::Emission;
+use candela_render::shape::{Shape, Sphere};
+use candela_render::texture::Texture;
+use candela_render::{Image, Rgb, Scene, SceneBuilder};
+
+fn settings(spp: u32) -> RenderSettings {
+    RenderSettings {
+        width: 16,
+        height: 12,
+        spp,
+        seed: 7,
+    }
+}
+
+fn image(scene: &Scene, integrator: &dyn Integrator, spp: u32) -> Image {
+    render(scene, integrator, &settings(spp), &|_| {}).image
+}
+
+/// The course's furnace: the camera inside a closed sphere of emission L_e and albedo ρ sees
+/// L = L_e + ρL everywhere, i.e. L_e/(1 − ρ). Roulette off (a depth limit where ρ^depth is
+/// negligible). Inside a sphere, light sampling and BSDF sampling have the same density, so MIS
+/// gives both weight ½ and every sample is exact: the test is tight (1e-3).
+#[test]
+fn closed_sphere_furnace_gives_le_over_one_minus_rho() {
+    for (le, rho) in [(1.0f32, 0.5f32), (0.3, 0.8), (2.0, 0.0)] {
+        let mut b = SceneBuilder::new();
+        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(rho))));
+        let e = b.add_emission(Emission {
+            radiance: Texture::Uniform(Rgb::splat(le)),
+            two_sided: true,
+        });
+        b.add_shape(Shape::Sphere(Sphere::new(Transform::scaling(Vec3::new(3.0, 3.0, 3.0)))), m, Some(e));
+        b.camera(Camera::perspective(1.0, 4.0 / 3.0, Transform::IDENTITY));
+        let scene = b.build(AccelKind::Bvh);
+        let path = Path {
+            max_depth: Some(200),
+            rr_depth: u32::MAX,
+            hide_emitters: false,
+        };
+        let img = image(&scene, &path, 4);
+        let expected = le / (1.0 - rho);
+        for p in img.pixels() {
+            assert!((p.r - expected).abs() <= 1e-3 * expected.max(1.0), "Le {le}, ρ {rho}: {p:?} vs {expected}");
+        }
+    }
+}
+
+/// The same furnace with Russian roulette on: unbiased, so the image mean stays L_e/(1 − ρ).
+#[test]
+fn furnace_with_roulette_is_unbiased() {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.8))));
+    let e = b.add_emission(Emission {
+        radiance: Texture::Uniform(Rgb::splat(1.0)),
+        two_sided: true,
+    });
+    b.add_shape(Shape::Sphere(Sphere::new(Transform::IDENTITY)), m, Some(e));
+    let scene = b.build(AccelKind::Bvh);
+    let img = image(&scene, &Path::default(), 256);
+    let mean = img.mean()[0];
+    assert!((mean - 5.0).abs() < 0.05, "{mean}");
+}
+
+/// White furnaces under a uniform environment of radiance 1: a lossless object (white Lambert,
+/// white mirror, clear glass) is invisible, every pixel is 1.
+#[test]
+fn lossless_materials_vanish_in_a_white_furnace() {
+    let models = [
+        ("white diffuse", Model::Diffuse { reflectance: Texture::Uniform(Rgb::WHITE) }),
+        ("white mirror", Model::Specular { reflectance: Texture::Uniform(Rgb::WHITE) }),
+        (
+            "clear glass",
+            Model::Dielectric {
+                eta: 1.5,
+                reflectance: Texture::Uniform(Rgb::WHITE),
+                transmittance: Texture::Uniform(Rgb::WHITE),
+                mf: None,
+            },
+        ),
+        (
+            "ideal conductor",
+            Model::Conductor {
+                eta_k: None,
+                reflectance: Texture::Uniform(Rgb::WHITE),
+                mf: None,
+            },
+        ),
+    ];
+    for (name, model) in models {
+        let mut b = SceneBuilder::new();
+        let m = b.add_material(Material::two_sided(model));
+        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(4.0, 0.0, 0.0)))), m, None);
+        b.add_light(Light::Environment(Environment::new(Texture::Uniform(Rgb::WHITE), Transform::IDENTITY)));
+        b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
+        let scene = b.build(AccelKind::Bvh);
+        let path = Path {
+            max_depth: Some(64),
+            rr_depth: 64,
+            hide_emitters: false,
+        };
+        let img = image(&scene, &path, 64);
+        let mean = img.mean()[0];
+        assert!((mean - 1.0).abs() < 0.01, "{name}: mean {mean}");
+        for p in img.pixels() {
+            assert!((p.r - 1.0).abs() < 0.15, "{name}: pixel {p:?}");
+        }
+        // Whitted sees the mirror and the glass the same way (no light sampling needed).
+        if name != "white diffuse" {
+            let w = image(&scene, &Whitted { max_depth: 64 }, 1);
+            for p in w.pixels() {
+                assert!((p.r - 1.0).abs() < 1e-3, "{name} under Whitted: {p:?}");
+            }
+        }
+    }
+}
+
+/// Phong, Blinn–Phong and Cook–Torrance under the path tracer conserve energy: with
+/// k_d + k_s ≤ 1 an object in a white furnace is never brighter than the furnace.
+#[test]
+fn glossy_models_conserve_energy_in_a_white_furnace() {
+    use candela_render::material::{Distribution, Lobe, Microfacet};
+    let kd = Texture::Uniform(Rgb::splat(0.5));
+    let ks = Texture::Uniform(Rgb::splat(0.5));
+    let models = [
+        Model::Phong { lobe: Lobe::Phong, kd: kd.clone(), ks: ks.clone(), n: 20.0 },
+        Model::Phong { lobe: Lobe::BlinnPhong, kd: kd.clone(), ks: ks.clone(), n: 20.0 },
+        Model::CookTorrance { kd: kd.clone(), ks: ks.clone(), mf: Microfacet::new(Distribution::Ggx, 0.3), ior: 1.5 },
+    ];
+    for model in models {
+        let mut b = SceneBuilder::new();
+        let m = b.add_material(Material::two_sided(model.clone()));
+        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(4.0, 0.0, 0.0)))), m, None);
+        b.add_light(Light::Environment(Environment::new(Texture::Uniform(Rgb::WHITE), Transform::IDENTITY)));
+        b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
+        let scene = b.build(AccelKind::Bvh);
+        let img = image(&scene, &Path::default(), 64);
+        let mean = img.mean()[0];
+        assert!(mean <= 1.0 + 0.01 && mean > 0.5, "{model:?}: mean {mean}");
+        let _ = Point3::ORIGIN;
+    }
+}

@@ -1,0 +1,720 @@
+//! Statistical correctness of light sampling: χ² goodness of fit of the directions that
+//! `Light::sample` returns against `Light::pdf_hit` (area lights) and `Light::pdf_escape`
+//! (lights at infinity), and Monte Carlo irradiance by light sampling against closed forms.
+//!
+//! Scenes hold one emitter and use the linear-list accelerator, so that these tests depend on
+//! the lights alone.
+
+#[path = "support/chi2.rs"]
+mod chi2;
+
+use std::sync::Arc;
+
+use candela_render::accel::AccelKind;
+use candela_render::image::Image;
+use candela_render::interaction::SurfaceProps;
+use candela_render::light::{Components, Environment, HemisphereLight, Light, Target};
+use candela_render::material::Material;
+use candela_render::math::{Point2, Point3, Ray, Transform, Vec3, PI};
+use candela_render::sampling::Pcg32;
+use candela_render::scene::Emission;
+use candela_render::shape::{Cube, Disk, Mesh, Parallelogram, Shape, Sphere};
+use candela_render::stats::RayStats;
+use candela_render::texture::{Filter, Texture};
+use candela_render::{Rgb, Scene, SceneBuilder};
+use chi2::{mean_and_error, sidak, Chi2, Grid, ALPHA};
+
+const SAMPLES: usize = 200_000;
+const ROWS: usize = 24;
+/// Emitted radiance of the area lights.
+const L: f32 = 2.5;
+
+/// The emitters of the suite.
+#[derive(Clone, Copy, Debug)]
+enum Emitter {
+    /// A sphere placed by a similarity (cone sampling from outside).
+    Sphere,
+    /// A sphere placed by a non-uniform scaling and a rotation (an ellipsoid: area sampling).
+    Ellipsoid,
+    /// A parallelogram.
+    Parallelogram,
+    /// A disk stretched into an ellipse.
+    Disk,
+    /// A rotated, non-uniformly scaled box.
+    Box,
+    /// A closed, irregular octahedron made of triangles of different areas.
+    Mesh,
+}
+
+fn sphere_place() -> (Point3, f32) {
+    (Point3::new(0.4, -0.3, 3.0), 0.8)
+}
+
+fn ellipsoid_place() -> Transform {
+    Transform::translation(Vec3::new(0.2, 0.5, 3.0))
+        * Transform::rotation(Vec3::new(1.0, 1.0, 0.3), 40.0).unwrap()
+        * Transform::scaling(Vec3::new(1.3, 0.5, 0.8))
+}
+
+fn box_place() -> Transform {
+    Transform::translation(Vec3::new(-0.3, 0.2, 3.5))
+        * Transform::rotation(Vec3::new(0.2, 1.0, 0.5), 35.0).unwrap()
+        * Transform::scaling(Vec3::new(0.9, 0.4, 0.6))
+}
+
+fn octahedron() -> Vec<[Point3; 3]> {
+    let c = Vec3::new(0.1, -0.2, 3.2);
+    let v = [
+        Point3::new(1.1, 0.1, 0.0),
+        Point3::new(-0.6, 0.0, 0.1),
+        Point3::new(0.0, 0.8, 0.0),
+        Point3::new(0.1, -0.5, 0.0),
+        Point3::new(0.0, 0.1, 0.9),
+        Point3::new(0.05, 0.0, -0.4),
+    ]
+    .map(|p| p + c);
+    let faces = [
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    faces.iter().map(|f| [v[f[0]], v[f[1]], v[f[2]]]).collect()
+}
+
+fn parallelogram() -> Parallelogram {
+    Parallelogram::new(
+        Point3::new(-0.8, -0.5, 2.0),
+        Vec3::new(1.5, 0.3, 0.4),
+        Vec3::new(0.2, 1.1, -0.3),
+    )
+    .unwrap()
+}
+
+/// A scene holding the emitter alone (emission two-sided or not).
+fn scene(e: Emitter, two_sided: bool) -> Scene {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+    let em = b.add_emission(Emission {
+        radiance: Texture::Uniform(Rgb::splat(L)),
+        two_sided,
+    });
+    match e {
+        Emitter::Sphere => {
+            let (c, r) = sphere_place();
+            let t = Transform::translation(c.to_vec())
+                * Transform::rotation_z(30.0)
+                * Transform::scaling(Vec3::new(r, r, r));
+            b.add_shape(Shape::Sphere(Sphere::new(t)), m, Some(em));
+        }
+        Emitter::Ellipsoid => {
+            b.add_shape(Shape::Sphere(Sphere::new(ellipsoid_place())), m, Some(em));
+        }
+        Emitter::Parallelogram => {
+            b.add_shape(Shape::Parallelogram(parallelogram()), m, Some(em));
+        }
+        Emitter::Disk => {
+            let t = Transform::translation(Vec3::new(0.3, 0.2, 2.5))
+                * Transform::rotation_x(25.0)
+                * Transform::scaling(Vec3::new(0.7, 1.2, 1.0));
+            b.add_shape(Shape::Disk(Disk::new(t)), m, Some(em));
+        }
+        Emitter::Box => {
+            b.add_shape(Shape::Cube(Cube::new(box_place())), m, Some(em));
+        }
+        Emitter::Mesh => {
+            let mut mesh = Mesh::default();
+            for (i, t) in octahedron().iter().enumerate() {
+                mesh.positions.extend_from_slice(t);
+                let k = 3 * i as u32;
+                mesh.indices.push([k, k + 1, k + 2]);
+            }
+            mesh.props = SurfaceProps {
+                material: m,
+                emission: Some(em),
+                light: None,
+            };
+            b.add_mesh(mesh);
+        }
+    }
+    let s = b.build(AccelKind::None);
+    assert_eq!(s.lights.len(), 1, "{e:?}: one area light expected");
+    s
+}
+
+/// A sample of `light` from `p` that the point really sees (samples on the hidden side of a
+/// closed emitter are occluded by its front, and count as "no direction").
+fn visible_sample(s: &Scene, light: &Light, p: Point3, u: [f32; 2]) -> Option<(Vec3, f32, Rgb)> {
+    let ls = light.sample(&s.geometry, &s.emissions, p, u)?;
+    match ls.target {
+        Target::Surface(q, _) => {
+            if !s.visible(p, q, &mut RayStats::default()) {
+                return None;
+            }
+        }
+        Target::Infinite => {}
+        Target::Point(_) => panic!("area and infinite lights do not target points"),
+    }
+    Some((ls.wi, ls.pdf, ls.li))
+}
+
+/// The solid-angle density of sampling direction `d` from `p`: pdf_hit at the first hit if it
+/// is an emitting point of the light, else 0.
+fn area_pdf(s: &Scene, light: &Light, p: Point3, d: Vec3) -> f32 {
+    match s.interact(&Ray::new(p, d), &mut RayStats::default()) {
+        Some(si) if !s.emitted(&si).is_black() => light.pdf_hit(p, si.p, si.n),
+        _ => 0.0,
+    }
+}
+
+/// One χ² configuration of an area light.
+struct AreaCase {
+    name: &'static str,
+    emitter: Emitter,
+    two_sided: bool,
+    p: Point3,
+    /// Grid axis and power.
+    axis: Vec3,
+    power: f64,
+}
+
+fn area_cases() -> Vec<AreaCase> {
+    let (c, r) = sphere_place();
+    let inside_sphere = c + Vec3::new(0.2, 0.3, -0.4);
+    let ell_c = ellipsoid_place().point(Point3::ORIGIN);
+    let box_c = box_place().point(Point3::ORIGIN);
+    let mesh_c = Point3::new(0.1, -0.15, 3.25);
+    let o = Point3::new(0.1, 0.2, -0.5);
+    let to = |q: Point3| q - o;
+    let _ = r;
+    vec![
+        AreaCase {
+            name: "similar sphere, point outside (cone sampling)",
+            emitter: Emitter::Sphere,
+            two_sided: false,
+            p: o,
+            axis: to(c),
+            power: 2.0,
+        },
+        AreaCase {
+            name: "similar sphere, point inside (area sampling)",
+            emitter: Emitter::Sphere,
+            two_sided: true,
+            p: inside_sphere,
+            axis: Vec3::Z,
+            power: 1.0,
+        },
+        AreaCase {
+            name: "ellipsoid, point outside (area sampling)",
+            emitter: Emitter::Ellipsoid,
+            two_sided: false,
+            p: o,
+            axis: to(ell_c),
+            power: 2.0,
+        },
+        AreaCase {
+            name: "ellipsoid, point inside",
+            emitter: Emitter::Ellipsoid,
+            two_sided: true,
+            p: ell_c + Vec3::new(0.3, 0.0, 0.1),
+            axis: Vec3::Z,
+            power: 1.0,
+        },
+        AreaCase {
+            name: "parallelogram, two-sided, seen from its back",
+            emitter: Emitter::Parallelogram,
+            two_sided: true,
+            p: o,
+            axis: to(Point3::new(0.0, 0.2, 2.0)),
+            power: 2.0,
+        },
+        AreaCase {
+            name: "parallelogram, one-sided, seen from its front",
+            emitter: Emitter::Parallelogram,
+            two_sided: false,
+            p: Point3::new(0.0, 0.3, 4.0),
+            axis: -Vec3::Z,
+            power: 2.0,
+        },
+        AreaCase {
+            name: "elliptic disk",
+            emitter: Emitter::Disk,
+            two_sided: true,
+            p: o,
+            axis: to(Point3::new(0.3, 0.2, 2.5)),
+            power: 2.0,
+        },
+        AreaCase {
+            name: "box, point outside",
+            emitter: Emitter::Box,
+            two_sided: false,
+            p: o,
+            axis: to(box_c),
+            power: 2.0,
+        },
+        AreaCase {
+            name: "box, point inside",
+            emitter: Emitter::Box,
+            two_sided: true,
+            p: box_c + Vec3::new(0.1, -0.1, 0.05),
+            axis: Vec3::Z,
+            power: 1.0,
+        },
+        AreaCase {
+            name: "mesh, point outside",
+            emitter: Emitter::Mesh,
+            two_sided: false,
+            p: o,
+            axis: to(mesh_c),
+            power: 2.0,
+        },
+        AreaCase {
+            name: "mesh, point inside",
+            emitter: Emitter::Mesh,
+            two_sided: true,
+            p: mesh_c,
+            axis: Vec3::Z,
+            power: 1.0,
+        },
+    ]
+}
+
+/// A lat-long map with a smooth gradient and a small, very bright spot.
+fn env_image() -> Texture {
+    let (w, h) = (48, 24);
+    let mut img = Image::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let v = 0.2 + 0.8 * (x as f32 / w as f32) + 0.5 * (y as f32 / h as f32);
+            img.set(x, y, Rgb::new(v, 0.7 * v, 0.3 + v));
+        }
+    }
+    for (x, y) in [(30, 7), (31, 7), (30, 8)] {
+        img.set(x, y, Rgb::new(400.0, 300.0, 200.0));
+    }
+    // A black row: directions never sampled, with density 0.
+    for x in 0..w {
+        img.set(x, 17, Rgb::BLACK);
+    }
+    Texture::Image {
+        image: Arc::new(img),
+        filter: Filter::Nearest,
+        scale: [1.0, 1.0],
+    }
+}
+
+fn env_transform() -> Transform {
+    Transform::rotation(Vec3::new(0.3, 1.0, 0.2), 50.0).unwrap()
+}
+
+fn infinite_cases() -> Vec<(&'static str, Light)> {
+    vec![
+        (
+            "environment map with a bright spot",
+            Light::Environment(Environment::new(env_image(), env_transform())),
+        ),
+        (
+            "constant environment",
+            Light::Environment(Environment::new(
+                Texture::Uniform(Rgb::splat(1.5)),
+                env_transform(),
+            )),
+        ),
+        (
+            "hemisphere light",
+            Light::Hemisphere(
+                HemisphereLight {
+                    radiance: Rgb::splat(2.0),
+                    up: Vec3::new(0.3, -0.5, 0.8).normalize(),
+                },
+                Components::from_intensity(Rgb::splat(2.0)),
+            ),
+        ),
+    ]
+}
+
+fn tests_count() -> usize {
+    area_cases().len() + infinite_cases().len()
+}
+
+fn seed(name: &str) -> u64 {
+    name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+// The directions of area-light samples seen from a point follow pdf_hit: cone sampling of a
+// sphere (uniform in the subtended cone), area sampling of spheres from inside, of ellipsoids
+// (with the area scale |det M|·|M⁻ᵀn| of the placement), parallelograms, elliptic disks, boxes
+// (faces by area) and meshes (triangles by area), converted to solid angle by d²/|cos θ|. The
+// hidden half of closed emitters and the back of one-sided emitters count as "no direction":
+// the density must integrate to the visible fraction.
+#[test]
+fn chi2_area_lights() {
+    let level = sidak(ALPHA, tests_count());
+    let mut failures = Vec::new();
+    for c in area_cases() {
+        let s = scene(c.emitter, c.two_sided);
+        let light = &s.lights[0];
+        let t = Chi2 {
+            name: c.name,
+            grid: Grid::new(c.axis, c.power, ROWS),
+            samples: SAMPLES,
+            seed: seed(c.name),
+            // Seen from inside, every sample is visible.
+            expected_mass: (c.power == 1.0).then_some(1.0),
+            level,
+        };
+        match t.run(
+            |u| visible_sample(&s, light, c.p, [u[0], u[1]]).map(|(d, p, _)| (d, p)),
+            |d| area_pdf(&s, light, c.p, d),
+        ) {
+            Ok(r) => println!(
+                "{}: p-value {:.3e}, visible mass {:.4}",
+                c.name, r.p_value, r.pdf_integral
+            ),
+            Err(e) => failures.push(e),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+// Lights at infinity: the environment map's directions follow its luminance × sin θ
+// distribution converted to solid angle (pdf_uv / (2π² sin θ)), through a rotated frame; black
+// texels are never sampled; the constant environment and the hemisphere light sample uniformly.
+#[test]
+fn chi2_infinite_lights() {
+    let level = sidak(ALPHA, tests_count());
+    let s = SceneBuilder::new().build(AccelKind::None);
+    let mut failures = Vec::new();
+    for (name, light) in infinite_cases() {
+        let t = Chi2 {
+            name,
+            grid: Grid::new(Vec3::Z, 1.0, ROWS),
+            samples: SAMPLES,
+            seed: seed(name),
+            expected_mass: Some(1.0),
+            level,
+        };
+        let p = Point3::ORIGIN;
+        match t.run(
+            |u| visible_sample(&s, &light, p, [u[0], u[1]]).map(|(d, p, _)| (d, p)),
+            |d| light.pdf_escape(d),
+        ) {
+            Ok(r) => println!("{name}: p-value {:.3e}", r.p_value),
+            Err(e) => failures.push(e),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The Monte Carlo irradiance E = ∫ L cos⁺θ dω at `p` (normal `n`) by sampling `light`, with
+/// its standard error.
+fn irradiance(
+    s: &Scene,
+    light: &Light,
+    p: Point3,
+    n: Vec3,
+    samples: usize,
+    seed: u64,
+) -> (f64, f64) {
+    let mut rng = Pcg32::new(seed, 77);
+    let (mut sum, mut sum2) = (0f64, 0f64);
+    for _ in 0..samples {
+        let v = match visible_sample(s, light, p, [rng.next_f32(), rng.next_f32()]) {
+            Some((wi, pdf, li)) => (li.average() * n.dot(wi).max(0.0) / pdf) as f64,
+            None => 0.0,
+        };
+        sum += v;
+        sum2 += v * v;
+    }
+    mean_and_error(sum, sum2, samples)
+}
+
+/// The irradiance from a uniform polygon of radiance `l` entirely above the horizon of `n` at
+/// `p` (Lambert's formula: E = l/2 · |Σ γ_k n·û_k|, γ_k the angle subtended by edge k and û_k
+/// the unit normal of the plane through p and that edge).
+fn polygon_irradiance(l: f64, p: Point3, n: Vec3, verts: &[Point3]) -> f64 {
+    let r: Vec<[f64; 3]> = verts
+        .iter()
+        .map(|v| {
+            let d = *v - p;
+            let len = (d.x as f64 * d.x as f64 + d.y as f64 * d.y as f64 + d.z as f64 * d.z as f64)
+                .sqrt();
+            [d.x as f64 / len, d.y as f64 / len, d.z as f64 / len]
+        })
+        .collect();
+    let mut sum = 0.0;
+    for k in 0..r.len() {
+        let (a, b) = (r[k], r[(k + 1) % r.len()]);
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let cl = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        let gamma = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+            .clamp(-1.0, 1.0)
+            .acos();
+        sum += gamma * (n.x as f64 * c[0] + n.y as f64 * c[1] + n.z as f64 * c[2]) / cl;
+    }
+    0.5 * l * sum.abs()
+}
+
+// Light sampling estimates the irradiance E = ∫ L cos θ dω without bias: its Monte Carlo mean
+// matches the closed forms within 3 standard errors: a sphere subtending the half-angle α on
+// the normal axis gives π L sin²α, a disk of radius R at height h on its axis π L R²/(h² + R²),
+// polygons (parallelogram, the visible faces of a box, the visible triangles of a mesh)
+// Lambert's formula, any closed emitter around the point π L, a hemisphere light
+// π L (1 + n·up)/2, a constant environment π L.
+#[test]
+fn irradiance_matches_closed_forms() {
+    let n_samples = 100_000;
+    let l = L as f64;
+    let mut failures = Vec::new();
+    let mut lines = Vec::new();
+    let mut check = |name: &str, (est, se): (f64, f64), exact: f64| {
+        lines.push(format!("{name}: {est:.5} ± {se:.5} vs {exact:.5}"));
+        if !((est - exact).abs() <= 3.0 * se + 1e-6 * exact) {
+            failures.push(format!("{name}: light sampling estimates E = {est:.6} ± {se:.6}, the closed form is {exact:.6} ({:.1} standard errors)", (est - exact).abs() / se));
+        }
+    };
+    let (c, r) = sphere_place();
+
+    // Sphere on the normal axis (cone sampling), from several distances.
+    let s = scene(Emitter::Sphere, false);
+    for dist in [1.2f32, 3.0, 20.0] {
+        let p = c + Vec3::new(0.0, 0.0, -dist);
+        let sin2 = (r / dist) as f64 * (r / dist) as f64;
+        check(
+            &format!("sphere at distance {dist}"),
+            irradiance(&s, &s.lights[0], p, Vec3::Z, n_samples, 1),
+            PI as f64 * l * sin2,
+        );
+    }
+    // Sphere tilted off the normal but above the horizon: E = π L sin²α cos β.
+    let p = c + Vec3::new(-1.5, 0.0, -2.0);
+    let axis = (c - p).normalize();
+    let sin2 = (r * r / (c - p).squared_norm()) as f64;
+    check(
+        "sphere off-axis",
+        irradiance(&s, &s.lights[0], p, Vec3::Z, n_samples, 2),
+        PI as f64 * l * sin2 * axis.z as f64,
+    );
+    // Inside spheres and ellipsoids (area sampling): the whole hemisphere glows.
+    let s2 = scene(Emitter::Sphere, true);
+    check(
+        "inside a sphere",
+        irradiance(
+            &s2,
+            &s2.lights[0],
+            c + Vec3::new(0.2, -0.3, 0.1),
+            Vec3::new(0.3, 0.4, 0.866).normalize(),
+            n_samples,
+            3,
+        ),
+        PI as f64 * l,
+    );
+    let s3 = scene(Emitter::Ellipsoid, true);
+    let ec = ellipsoid_place().point(Point3::ORIGIN);
+    check(
+        "inside an ellipsoid",
+        irradiance(
+            &s3,
+            &s3.lights[0],
+            ec + Vec3::new(0.2, 0.1, 0.0),
+            Vec3::new(-0.5, 0.1, 0.86).normalize(),
+            n_samples,
+            4,
+        ),
+        PI as f64 * l,
+    );
+
+    // A circular disk of radius R facing the point at height h on its axis.
+    for (rad, h) in [(0.5f32, 2.0f32), (1.5, 0.7)] {
+        let mut b = SceneBuilder::new();
+        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+        let em = b.add_emission(Emission {
+            radiance: Texture::Uniform(Rgb::splat(L)),
+            two_sided: false,
+        });
+        // The disk's normal (+z of its frame) faces the point below it.
+        let t = Transform::translation(Vec3::new(0.0, 0.0, h))
+            * Transform::rotation_x(180.0)
+            * Transform::scaling(Vec3::new(rad, rad, 1.0));
+        b.add_shape(Shape::Disk(Disk::new(t)), m, Some(em));
+        let sd = b.build(AccelKind::None);
+        let exact = PI as f64 * l * (rad * rad) as f64 / (h * h + rad * rad) as f64;
+        check(
+            &format!("disk R={rad} h={h}"),
+            irradiance(&sd, &sd.lights[0], Point3::ORIGIN, Vec3::Z, n_samples, 5),
+            exact,
+        );
+    }
+
+    // A parallelogram, by Lambert's formula.
+    let sp = scene(Emitter::Parallelogram, true);
+    let pg = parallelogram();
+    let quad = [pg.p, pg.p + pg.v, pg.p + pg.v + pg.w, pg.p + pg.w];
+    for (p, n) in [
+        (Point3::new(0.1, 0.2, -0.5), Vec3::Z),
+        (
+            Point3::new(-1.0, 0.5, 0.5),
+            Vec3::new(0.3, -0.2, 0.93).normalize(),
+        ),
+    ] {
+        check(
+            &format!("parallelogram from {p:?}"),
+            irradiance(&sp, &sp.lights[0], p, n, n_samples, 6),
+            polygon_irradiance(l, p, n, &quad),
+        );
+    }
+
+    // A box from outside: the faces turned to the point, by Lambert's formula; from inside: π L.
+    let sb = scene(Emitter::Box, false);
+    let bt = box_place();
+    let p = Point3::new(0.1, 0.2, -0.5);
+    let mut exact = 0.0;
+    for face in 0..6u32 {
+        let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .map(|(a, b)| bt.point(Cube::face_point(face, a, b)));
+        let centre = bt.point(Cube::face_point(face, 0.0, 0.0));
+        let outward = centre - bt.point(Point3::ORIGIN);
+        // A face is seen from outside when the point lies on its outer side.
+        let fnormal = (corners[1] - corners[0]).cross(corners[3] - corners[0]);
+        let fnormal = if fnormal.dot(outward) < 0.0 {
+            -fnormal
+        } else {
+            fnormal
+        };
+        if fnormal.dot(p - centre) > 0.0 {
+            exact += polygon_irradiance(l, p, Vec3::Z, &corners);
+        }
+    }
+    check(
+        "box from outside",
+        irradiance(&sb, &sb.lights[0], p, Vec3::Z, n_samples, 7),
+        exact,
+    );
+    let sb2 = scene(Emitter::Box, true);
+    check(
+        "inside a box",
+        irradiance(
+            &sb2,
+            &sb2.lights[0],
+            bt.point(Point3::new(0.2, 0.3, -0.1)),
+            Vec3::new(0.6, 0.0, 0.8),
+            n_samples,
+            8,
+        ),
+        PI as f64 * l,
+    );
+
+    // A closed mesh from outside (front triangles) and from inside.
+    let sm = scene(Emitter::Mesh, false);
+    let centre = Point3::new(0.1, -0.15, 3.25);
+    let mut exact = 0.0;
+    for t in octahedron() {
+        let nrm = (t[1] - t[0]).cross(t[2] - t[0]);
+        let nrm = if nrm.dot(t[0] - centre) < 0.0 {
+            -nrm
+        } else {
+            nrm
+        };
+        if nrm.dot(p - t[0]) > 0.0 {
+            exact += polygon_irradiance(l, p, Vec3::Z, &t);
+        }
+    }
+    check(
+        "mesh from outside",
+        irradiance(&sm, &sm.lights[0], p, Vec3::Z, n_samples, 9),
+        exact,
+    );
+    let sm2 = scene(Emitter::Mesh, true);
+    check(
+        "inside a mesh",
+        irradiance(
+            &sm2,
+            &sm2.lights[0],
+            centre,
+            Vec3::new(0.0, -0.6, 0.8),
+            n_samples,
+            10,
+        ),
+        PI as f64 * l,
+    );
+
+    // Lights at infinity.
+    let empty = SceneBuilder::new().build(AccelKind::None);
+    let hemi = HemisphereLight {
+        radiance: Rgb::splat(2.0),
+        up: Vec3::new(0.3, -0.5, 0.8).normalize(),
+    };
+    let hl = Light::Hemisphere(hemi, Components::from_intensity(Rgb::splat(2.0)));
+    for nrm in [hemi.up, Vec3::Z, Vec3::X, -hemi.up] {
+        let exact = PI as f64 * hemi.diffuse_irradiance_over_pi(nrm).average() as f64;
+        let exact_by_hand = PI as f64 * 2.0 * 0.5 * (1.0 + nrm.dot(hemi.up) as f64);
+        assert!((exact - exact_by_hand).abs() < 1e-5);
+        check(
+            &format!("hemisphere light, normal {nrm:?}"),
+            irradiance(&empty, &hl, Point3::ORIGIN, nrm, n_samples, 11),
+            exact_by_hand,
+        );
+    }
+    let env = Light::Environment(Environment::new(
+        Texture::Uniform(Rgb::splat(1.5)),
+        env_transform(),
+    ));
+    check(
+        "constant environment",
+        irradiance(
+            &empty,
+            &env,
+            Point3::ORIGIN,
+            Vec3::new(0.2, 0.3, 0.93).normalize(),
+            n_samples,
+            12,
+        ),
+        PI as f64 * 1.5,
+    );
+    // The image map: the reference integrates the (piecewise constant) map over the hemisphere
+    // by a fine quadrature in (u, v).
+    let tex = env_image();
+    let envl = Light::Environment(Environment::new(tex.clone(), env_transform()));
+    let nrm = Vec3::new(-0.4, 0.5, 0.77).normalize();
+    let (nu, nv) = (1536, 768);
+    let mut exact = 0.0f64;
+    for j in 0..nv {
+        let v = (j as f64 + 0.5) / nv as f64;
+        let theta = v * std::f64::consts::PI;
+        for i in 0..nu {
+            let u = (i as f64 + 0.5) / nu as f64;
+            let phi = u * 2.0 * std::f64::consts::PI;
+            let dl = Vec3::new(
+                (theta.sin() * phi.cos()) as f32,
+                (theta.sin() * phi.sin()) as f32,
+                theta.cos() as f32,
+            );
+            let d = env_transform().vector(dl);
+            let cos = nrm.dot(d).max(0.0) as f64;
+            let rad = tex.eval(Point2::new(u as f32, v as f32)).average() as f64;
+            exact += rad
+                * cos
+                * theta.sin()
+                * (2.0 * std::f64::consts::PI / nu as f64)
+                * (std::f64::consts::PI / nv as f64);
+        }
+    }
+    check(
+        "environment map",
+        irradiance(&empty, &envl, Point3::ORIGIN, nrm, n_samples, 13),
+        exact,
+    );
+
+    println!("{}", lines.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}

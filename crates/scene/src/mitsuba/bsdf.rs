@@ -1,0 +1,272 @@
+//! BSDFs, textures and images of Mitsuba scenes.
+//!
+//! Every BSDF is one-sided, as in Mitsuba (a surface seen from the back is black), unless
+//! wrapped in `twosided`. Defaults are Mitsuba's: `diffuse` reflectance 0.5; conductors are
+//! perfect mirrors (`material="none"`) unless a `material` or `eta`/`k` is given; dielectrics
+//! have `int_ior` = bk7 (1.5046) and `ext_ior` = air (1.000277); plastics polypropylene (1.49);
+//! rough models use a Beckmann distribution with α = 0.1.
+
+use super::xml::{Element, Props, Value};
+use super::{presets, Loader};
+use crate::error::{Pos, SceneError};
+use candela_render::material::{Distribution, Material, MaterialId, Microfacet, Model, RoughCoating};
+use candela_render::texture::{Filter, Texture};
+use candela_render::{Image, Rgb};
+use std::sync::Arc;
+
+/// Mitsuba clamps roughness to at least this value.
+const MIN_ALPHA: f64 = 1e-4;
+
+/// True when a texture varies over the surface.
+pub(super) fn varies(t: &Texture) -> bool {
+    !matches!(t, Texture::Uniform(_))
+}
+
+impl<'t> Loader<'t> {
+    /// The material of a `<bsdf>` element (built once per element).
+    pub(super) fn material(&mut self, e: &'t Element) -> Result<MaterialId, SceneError> {
+        if let Some(&id) = self.materials.get(&e.key()) {
+            return Ok(id);
+        }
+        let (model, two_sided, textured) = self.bsdf(e)?;
+        let id = self.add_material(Material { model, two_sided }, textured);
+        self.materials.insert(e.key(), id);
+        Ok(id)
+    }
+
+    fn add_material(&mut self, m: Material, textured: bool) -> MaterialId {
+        let id = self.scene.add_material(m);
+        self.textured.resize(id as usize + 1, false);
+        self.textured[id as usize] = textured;
+        id
+    }
+
+    /// Mitsuba's BSDF for shapes without one: a one-sided diffuse of reflectance 0.5.
+    pub(super) fn default_material(&mut self) -> MaterialId {
+        if let Some(id) = self.default_material {
+            return id;
+        }
+        let m = Material::one_sided(Model::Diffuse {
+            reflectance: Texture::Uniform(Rgb::splat(0.5)),
+        });
+        let id = self.add_material(m, false);
+        self.default_material = Some(id);
+        id
+    }
+
+    /// The model of a `<bsdf>`, whether it is two-sided, and whether a texture varies.
+    fn bsdf(&mut self, e: &'t Element) -> Result<(Model, bool, bool), SceneError> {
+        self.enter(e)?;
+        let p = self.props(e)?;
+        let mut textured = false;
+        let kind = e.kind();
+        let model = match kind {
+            "twosided" => {
+                let inner = p.objects("bsdf");
+                let (b, _) = match inner.as_slice() {
+                    [one] => *one,
+                    [a, b] if a.0.key() == b.0.key() => *a,
+                    [_, (_, pos)] => return Err(p.error(*pos, "twosided with different front and back BSDFs is not supported")),
+                    _ => return Err(p.error(e.pos, "twosided needs one nested <bsdf>")),
+                };
+                let (model, _, t) = self.bsdf(b)?;
+                self.finish(&p);
+                self.leave();
+                return Ok((model, true, t));
+            }
+            "diffuse" => Model::Diffuse {
+                reflectance: self.tex(&p, "reflectance", 0.5, &mut textured)?,
+            },
+            "conductor" | "roughconductor" => Model::Conductor {
+                eta_k: self.conductor_ior(&p)?,
+                reflectance: self.tex(&p, "specular_reflectance", 1.0, &mut textured)?,
+                mf: if kind == "roughconductor" { Some(self.microfacet(&p)?) } else { None },
+            },
+            "dielectric" | "roughdielectric" => Model::Dielectric {
+                eta: self.eta(&p, "bk7")?,
+                reflectance: self.tex(&p, "specular_reflectance", 1.0, &mut textured)?,
+                transmittance: self.tex(&p, "specular_transmittance", 1.0, &mut textured)?,
+                mf: if kind == "roughdielectric" { Some(self.microfacet(&p)?) } else { None },
+            },
+            "plastic" | "roughplastic" => {
+                let kd = self.tex(&p, "diffuse_reflectance", 0.5, &mut textured)?;
+                let ks = self.tex(&p, "specular_reflectance", 1.0, &mut textured)?;
+                let eta = self.eta(&p, "polypropylene")?;
+                let nonlinear = p.or("nonlinear", false)?;
+                if kind == "plastic" {
+                    Model::Plastic { kd, ks, eta, nonlinear }
+                } else {
+                    let coating = Box::new(RoughCoating::new(self.microfacet(&p)?, eta));
+                    Model::RoughPlastic { kd, ks, coating, nonlinear }
+                }
+            }
+            other => {
+                return Err(p.error(
+                    e.pos,
+                    format!(
+                        "unsupported BSDF '{other}' (supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, twosided)"
+                    ),
+                ))
+            }
+        };
+        self.finish(&p);
+        self.leave();
+        Ok((model, false, textured))
+    }
+
+    /// `distribution` and `alpha` (or equal `alpha_u`, `alpha_v`).
+    fn microfacet(&self, p: &Props) -> Result<Microfacet, SceneError> {
+        let dist = match p.choice("distribution", &["beckmann", "ggx"])?.as_str() {
+            "ggx" => Distribution::Ggx,
+            _ => Distribution::Beckmann,
+        };
+        let range = (0.0, 1e4);
+        let mut alpha = p.number_in("alpha", 0.1, range)?;
+        if p.has("alpha_u") || p.has("alpha_v") {
+            let (u, v) = (p.number_in("alpha_u", 0.1, range)?, p.number_in("alpha_v", 0.1, range)?);
+            if u != v {
+                return Err(p.error(p.pos("alpha_u"), "anisotropic roughness (alpha_u ≠ alpha_v) is not supported"));
+            }
+            alpha = u;
+        }
+        p.ignore(&["sample_visible"]);
+        Ok(Microfacet::new(dist, alpha.max(MIN_ALPHA) as f32))
+    }
+
+    /// The relative index `int_ior / ext_ior`; each is a number or a named material.
+    fn eta(&self, p: &Props, int_default: &str) -> Result<f32, SceneError> {
+        let ior = |name: &str, default: &str| -> Result<f32, SceneError> {
+            let v = match p.item(name).map(|i| (&i.value, i.pos)) {
+                None => presets::ior(default).unwrap_or(1.0),
+                Some((Value::Str(s), pos)) => presets::ior(s)
+                    .ok_or_else(|| p.error(pos, format!("unknown index of refraction '{s}' (known: {})", presets::ior_names())))?,
+                Some((&Value::Float(v), _)) => v as f32,
+                Some((&Value::Int(v), _)) => v as f32,
+                Some((v, pos)) => return Err(p.error(pos, format!("'{name}' must be a number or a material name, not {}", v.describe()))),
+            };
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(p.error(p.pos(name), format!("'{name}' must be positive, not {v}")));
+            }
+            Ok(v)
+        };
+        Ok(ior("int_ior", int_default)? / ior("ext_ior", "air")?)
+    }
+
+    /// A conductor's (η, k): from `eta` and `k`, or the named `material`; `None` for "none"
+    /// (the perfect mirror, F = 1).
+    fn conductor_ior(&self, p: &Props) -> Result<Option<(Rgb, Rgb)>, SceneError> {
+        if p.has("eta") || p.has("k") {
+            if p.has("material") {
+                return Err(p.error(p.pos("material"), "give either 'material' or 'eta' and 'k', not both"));
+            }
+            let (eta, k) = (self.color(p, "eta", 0.0)?, self.color(p, "k", 1.0)?);
+            // η = 0, k = 1 is Mitsuba's "none".
+            return Ok((eta != Rgb::BLACK || k != Rgb::WHITE).then_some((eta, k)));
+        }
+        let name = p.or("material", "none".to_string())?;
+        if name == "none" {
+            return Ok(None);
+        }
+        let (eta, k) = presets::conductor(&name).ok_or_else(|| {
+            p.error(p.pos("material"), format!("unknown conductor material '{name}' (known: none, {})", presets::conductor_names()))
+        })?;
+        let rgb = |c: [f32; 3]| Rgb::new(c[0], c[1], c[2]);
+        Ok(Some((rgb(eta), rgb(k))))
+    }
+
+    /// A property that may vary over a surface: a colour, a number, or a `<texture>`.
+    pub(super) fn tex(&mut self, p: &Props<'t>, name: &str, default: f32, textured: &mut bool) -> Result<Texture, SceneError> {
+        let nested = match p.item(name).map(|i| (&i.value, i.pos)) {
+            Some((&Value::Object(e), pos)) if e.tag == "texture" => Some((e, pos)),
+            Some((Value::Object(e), pos)) => {
+                return Err(p.error(pos, format!("'{name}' must be a colour or a <texture>, not {}", e.describe())))
+            }
+            _ => None,
+        };
+        let t = match nested {
+            Some((e, _)) => self.texture_plugin(e)?,
+            None => Texture::Uniform(self.color(p, name, default)?),
+        };
+        *textured |= varies(&t);
+        Ok(t)
+    }
+
+    /// A `<texture>` element (built once per element).
+    pub(super) fn texture_plugin(&mut self, e: &'t Element) -> Result<Texture, SceneError> {
+        if let Some(t) = self.textures.get(&e.key()) {
+            return Ok(t.clone());
+        }
+        self.enter(e)?;
+        let p = self.props(e)?;
+        let scale = self.uv_scale(&p)?;
+        let t = match e.kind() {
+            "bitmap" => {
+                let (name, pos) = p.get::<String>("filename")?.ok_or_else(|| p.error(e.pos, "bitmap needs a 'filename'"))?;
+                let raw = p.or("raw", false)?;
+                let filter = match p.choice("filter_type", &["bilinear", "nearest"])?.as_str() {
+                    "nearest" => Filter::Nearest,
+                    _ => Filter::Bilinear,
+                };
+                if scale.iter().any(|s| *s > 1.0) {
+                    return Err(p.error(p.pos("to_uv"), "to_uv scalings above 1 repeat the image, which candela's image lookup cannot do"));
+                }
+                // Within [0,1]², Mitsuba's wrap modes differ only at the image's border.
+                p.ignore(&["wrap_mode", "format", "accel"]);
+                Texture::Image {
+                    image: self.image(&name, raw, pos)?,
+                    filter,
+                    scale,
+                }
+            }
+            "checkerboard" => {
+                let (c1, c2) = (self.color(&p, "color0", 0.4)?, self.color(&p, "color1", 0.2)?);
+                // Mitsuba: color0 where frac(u) and frac(v) are on the same side of ½, i.e.
+                // candela's checkerboard of 2 squares per unit of (scaled) uv.
+                let steps = 2.0 * scale[0];
+                if scale[0] != scale[1] || steps.fract() != 0.0 || !(1.0..=65536.0).contains(&steps) {
+                    return Err(p.error(p.pos("to_uv"), "checkerboard: to_uv must scale u and v by the same multiple of ½"));
+                }
+                Texture::Checkered { c1, c2, steps: steps as u32 }
+            }
+            other => return Err(p.error(e.pos, format!("unsupported texture '{other}' (supported: bitmap, checkerboard)"))),
+        };
+        self.finish(&p);
+        self.leave();
+        self.textures.insert(e.key(), t.clone());
+        Ok(t)
+    }
+
+    /// The scaling of `to_uv` (which must be a pure scaling of u and v).
+    fn uv_scale(&self, p: &Props) -> Result<[f32; 2], SceneError> {
+        let Some((m, pos)) = p.get::<super::math::M4>("to_uv")? else {
+            return Ok([1.0, 1.0]);
+        };
+        let off_diagonal = (0..3).any(|r| (0..4).any(|c| r != c && m.0[r][c] != 0.0));
+        if off_diagonal || !(m.0[0][0] > 0.0 && m.0[1][1] > 0.0) {
+            return Err(p.error(pos, "to_uv: only positive scalings of u and v are supported"));
+        }
+        Ok([m.0[0][0] as f32, m.0[1][1] as f32])
+    }
+
+    /// The image `name` (resolved against the scene's folder), linear RGB. PNGs are sRGB-decoded
+    /// unless `raw` (Mitsuba's `raw="true"` keeps the stored values).
+    pub(super) fn image(&mut self, name: &str, raw: bool, pos: Pos) -> Result<Arc<Image>, SceneError> {
+        let path = self.resolve(name);
+        if let Some(i) = self.images.get(&(path.clone(), raw)) {
+            return Ok(i.clone());
+        }
+        let mut img = candela_imageio::read_image(&path).map_err(|e| self.err(pos, format!("cannot load image '{name}': {e}")))?;
+        if img.width() == 0 || img.height() == 0 {
+            return Err(self.err(pos, format!("image '{name}' is empty")));
+        }
+        let is_png = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        if raw && is_png {
+            for px in img.pixels_mut() {
+                *px = px.map(candela_imageio::tonemap::srgb_oetf);
+            }
+        }
+        let img = Arc::new(img);
+        self.images.insert((path, raw), img.clone());
+        Ok(img)
+    }
+}

@@ -1,0 +1,713 @@
+//! The XML layer of the Mitsuba importer: the document as a tree of elements with their
+//! positions, `$name` parameters substituted in document order, property values parsed, and
+//! [`Props`], the one reader of typed plugin parameters.
+
+use super::math::M4;
+use crate::error::{Pos, SceneError, SourceFile};
+use std::cell::Cell;
+use std::collections::HashMap;
+
+/// Deepest element nesting accepted (real scenes need a handful of levels).
+const MAX_DEPTH: usize = 128;
+
+/// An XML element after parameter substitution.
+#[derive(Debug)]
+pub(super) struct Element {
+    /// The tag name.
+    pub tag: String,
+    /// Where the element starts (its `<`).
+    pub pos: Pos,
+    /// The attributes, in order.
+    pub attrs: Vec<Attr>,
+    /// The child elements, in order.
+    pub children: Vec<Element>,
+}
+
+/// An attribute with its substituted value.
+#[derive(Debug)]
+pub(super) struct Attr {
+    /// The attribute's name.
+    pub name: String,
+    /// The value after `$name` substitution.
+    pub value: String,
+    /// Where the value starts.
+    pub pos: Pos,
+}
+
+impl Element {
+    /// The attribute `name`, if present.
+    pub fn attr(&self, name: &str) -> Option<&Attr> {
+        self.attrs.iter().find(|a| a.name == name)
+    }
+
+    /// The value of the attribute `name`, if present.
+    pub fn get(&self, name: &str) -> Option<&str> {
+        self.attr(name).map(|a| a.value.as_str())
+    }
+
+    /// The `type` attribute (empty when missing).
+    pub fn kind(&self) -> &str {
+        self.get("type").unwrap_or("")
+    }
+
+    /// `<tag type="kind">`, to name the element in messages.
+    pub fn describe(&self) -> String {
+        match self.get("type") {
+            Some(t) => format!("<{} type=\"{t}\">", self.tag),
+            None => format!("<{}>", self.tag),
+        }
+    }
+
+    /// A stable key for caches (the element's address; the tree outlives every cache).
+    pub fn key(&self) -> usize {
+        self as *const Element as usize
+    }
+}
+
+/// Byte offsets → 1-based line and column (columns count characters).
+struct LineIndex<'a> {
+    text: &'a str,
+    starts: Vec<usize>,
+}
+
+impl<'a> LineIndex<'a> {
+    fn new(text: &'a str) -> Self {
+        let starts = std::iter::once(0).chain(text.match_indices('\n').map(|(i, _)| i + 1)).collect();
+        Self { text, starts }
+    }
+
+    fn pos(&self, byte: usize) -> Pos {
+        let byte = byte.min(self.text.len());
+        let line = self.starts.partition_point(|&s| s <= byte).max(1);
+        let start = self.starts[line - 1];
+        let col = self.text.get(start..byte).map_or(1, |s| s.chars().count() + 1);
+        Pos::new(line as u32, col as u32)
+    }
+}
+
+/// A `$name` parameter: from the command line or a `<default>`.
+struct Param {
+    name: String,
+    value: String,
+    from_cli: bool,
+    used: bool,
+}
+
+/// Parses `src` into a tree of elements, substituting parameters in document order.
+/// Returns the root element and the command-line parameters the scene never used.
+pub(super) fn parse(src: &SourceFile, defines: &[(String, String)]) -> Result<(Element, Vec<String>), SceneError> {
+    let text: &str = &src.text;
+    let opts = roxmltree::ParsingOptions {
+        allow_dtd: false,
+        ..roxmltree::ParsingOptions::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(text, opts).map_err(|e| {
+        let p = e.pos();
+        let msg = e.to_string();
+        // roxmltree ends its messages with " at line:col"; the position is shown anyway.
+        let msg = msg.rsplit_once(" at ").map_or(msg.as_str(), |(m, _)| m);
+        src.error(Pos::new(p.row, p.col), format!("malformed XML: {msg}"))
+    })?;
+    let mut params: Vec<Param> = defines
+        .iter()
+        .map(|(n, v)| Param {
+            name: n.clone(),
+            value: v.clone(),
+            from_cli: true,
+            used: false,
+        })
+        .collect();
+    let mut p = Parser {
+        src,
+        lines: LineIndex::new(text),
+        params: &mut params,
+    };
+    let root = p.element(doc.root_element(), 0)?;
+    let unused = params
+        .iter()
+        .filter(|p| p.from_cli && !p.used)
+        .map(|p| format!("{}={}", p.name, p.value))
+        .collect();
+    Ok((root, unused))
+}
+
+struct Parser<'a> {
+    src: &'a SourceFile,
+    lines: LineIndex<'a>,
+    params: &'a mut Vec<Param>,
+}
+
+impl Parser<'_> {
+    fn element(&mut self, node: roxmltree::Node, depth: usize) -> Result<Element, SceneError> {
+        let pos = self.lines.pos(node.range().start);
+        if depth > MAX_DEPTH {
+            return Err(self.src.error(pos, "elements are nested too deeply"));
+        }
+        let mut attrs = Vec::new();
+        for a in node.attributes() {
+            let range = a.range_value();
+            // Positions inside the value are exact when it holds no XML escapes.
+            let raw = self.src.text.get(range.clone()) == Some(a.value());
+            let value = self.substitute(a.value(), range.start, raw)?;
+            attrs.push(Attr {
+                name: a.name().to_string(),
+                value,
+                pos: self.lines.pos(range.start),
+            });
+        }
+        let mut e = Element {
+            tag: node.tag_name().name().to_string(),
+            pos,
+            attrs,
+            children: Vec::new(),
+        };
+        if e.tag == "default" {
+            let (Some(name), Some(value)) = (e.get("name"), e.get("value")) else {
+                return Err(self.src.error(pos, "<default> needs the attributes 'name' and 'value'"));
+            };
+            if name.is_empty() {
+                return Err(self.src.error(pos, "<default>: the name is empty"));
+            }
+            if !self.params.iter().any(|p| p.name == name) {
+                self.params.push(Param {
+                    name: name.to_string(),
+                    value: value.to_string(),
+                    from_cli: false,
+                    used: false,
+                });
+            }
+        }
+        for child in node.children().filter(|c| c.is_element()) {
+            e.children.push(self.element(child, depth + 1)?);
+        }
+        Ok(e)
+    }
+
+    /// Replaces every `$name` by its value (the longest defined name wins, as in Mitsuba);
+    /// `\$` stands for a literal dollar sign.
+    fn substitute(&mut self, value: &str, start: usize, raw: bool) -> Result<String, SceneError> {
+        if !value.contains('$') {
+            return Ok(value.to_string());
+        }
+        let mut out = String::with_capacity(value.len());
+        let mut rest = value;
+        let mut offset = 0;
+        while let Some(i) = rest.find('$') {
+            if rest[..i].ends_with('\\') {
+                out.push_str(&rest[..i - 1]);
+                out.push('$');
+            } else {
+                out.push_str(&rest[..i]);
+                let after = &rest[i + 1..];
+                let best = self
+                    .params
+                    .iter_mut()
+                    .filter(|p| after.starts_with(p.name.as_str()))
+                    .max_by_key(|p| p.name.len());
+                match best {
+                    Some(p) => {
+                        p.used = true;
+                        out.push_str(&p.value);
+                        let n = p.name.len();
+                        rest = &after[n..];
+                        offset += i + 1 + n;
+                        continue;
+                    }
+                    None => {
+                        let name: String = after.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+                        let at = if raw { start + offset + i } else { start };
+                        return Err(self.src.error(
+                            self.lines.pos(at),
+                            format!("undefined parameter ${name} (define it with <default name=\"{name}\" value=\"…\"/> or -d {name}=…)"),
+                        ));
+                    }
+                }
+            }
+            rest = &rest[i + 1..];
+            offset += i + 1;
+        }
+        out.push_str(rest);
+        Ok(out)
+    }
+}
+
+/// A parsed property value.
+#[derive(Clone, Debug)]
+pub(super) enum Value<'t> {
+    /// `<float>`.
+    Float(f64),
+    /// `<integer>`.
+    Int(i64),
+    /// `<boolean>`.
+    Bool(bool),
+    /// `<string>`.
+    Str(&'t str),
+    /// `<rgb>`, or a `<spectrum>` with one value.
+    Rgb([f64; 3]),
+    /// `<point>` or `<vector>`.
+    Vector([f64; 3]),
+    /// `<transform>`.
+    Transform(M4),
+    /// A nested plugin, or the target of a `<ref>`.
+    Object(&'t Element),
+}
+
+impl Value<'_> {
+    /// What the value is, for messages ("a float", "<bsdf type=\"diffuse\">").
+    pub fn describe(&self) -> String {
+        match self {
+            Value::Float(_) => "a float".into(),
+            Value::Int(_) => "an integer".into(),
+            Value::Bool(_) => "a boolean".into(),
+            Value::Str(_) => "a string".into(),
+            Value::Rgb(_) => "a colour".into(),
+            Value::Vector(_) => "a point or vector".into(),
+            Value::Transform(_) => "a transform".into(),
+            Value::Object(e) => e.describe(),
+        }
+    }
+}
+
+/// Types that a property can be read as.
+pub(super) trait FromValue: Sized {
+    /// What the property must be, for messages ("a float").
+    const WHAT: &'static str;
+    /// The value as `Self`, or `None` when the types do not match.
+    fn from_value(v: &Value) -> Option<Self>;
+}
+
+impl FromValue for f64 {
+    const WHAT: &'static str = "a number";
+    fn from_value(v: &Value) -> Option<Self> {
+        match *v {
+            Value::Float(x) => Some(x),
+            Value::Int(i) => Some(i as f64),
+            _ => None,
+        }
+    }
+}
+
+impl FromValue for f32 {
+    const WHAT: &'static str = "a number";
+    fn from_value(v: &Value) -> Option<Self> {
+        f64::from_value(v).map(|x| x as f32).filter(|x| x.is_finite())
+    }
+}
+
+impl FromValue for i64 {
+    const WHAT: &'static str = "an integer";
+    fn from_value(v: &Value) -> Option<Self> {
+        match *v {
+            Value::Int(i) => Some(i),
+            _ => None,
+        }
+    }
+}
+
+impl FromValue for bool {
+    const WHAT: &'static str = "a boolean";
+    fn from_value(v: &Value) -> Option<Self> {
+        match *v {
+            Value::Bool(b) => Some(b),
+            _ => None,
+        }
+    }
+}
+
+impl FromValue for String {
+    const WHAT: &'static str = "a string";
+    fn from_value(v: &Value) -> Option<Self> {
+        match v {
+            Value::Str(s) => Some(s.to_string()),
+            _ => None,
+        }
+    }
+}
+
+impl FromValue for [f64; 3] {
+    const WHAT: &'static str = "a point or vector";
+    fn from_value(v: &Value) -> Option<Self> {
+        match *v {
+            Value::Vector(p) => Some(p),
+            _ => None,
+        }
+    }
+}
+
+impl FromValue for M4 {
+    const WHAT: &'static str = "a transform";
+    fn from_value(v: &Value) -> Option<Self> {
+        match v {
+            Value::Transform(m) => Some(*m),
+            _ => None,
+        }
+    }
+}
+
+/// One property of a plugin.
+pub(super) struct Item<'t> {
+    /// The `name` attribute (`None` for unnamed nested plugins).
+    pub name: Option<String>,
+    /// The value.
+    pub value: Value<'t>,
+    /// Where the property is written.
+    pub pos: Pos,
+    used: Cell<bool>,
+}
+
+/// The parameters of one plugin element, read by type with defaults; remembers which were read
+/// so that the rest can be reported.
+pub(super) struct Props<'t> {
+    /// The plugin element.
+    pub owner: &'t Element,
+    items: Vec<Item<'t>>,
+    src: SourceFile,
+}
+
+impl<'t> Props<'t> {
+    /// Parses the properties of `owner`. `ids` resolves `<ref>`s; `upgrade` converts the
+    /// camelCase names of Mitsuba 0.6 files.
+    pub fn new(owner: &'t Element, ids: &HashMap<String, &'t Element>, src: &SourceFile, upgrade: bool) -> Result<Self, SceneError> {
+        let mut items: Vec<Item<'t>> = Vec::new();
+        for c in &owner.children {
+            let err = |msg: String| src.error(c.pos, msg);
+            let name = c.get("name").map(|n| if upgrade { camel_to_underscore(n) } else { n.to_string() });
+            let need = |attr: &str| c.attr(attr).ok_or_else(|| err(format!("<{}> needs the attribute '{attr}'", c.tag)));
+            let value = match c.tag.as_str() {
+                "float" => Value::Float(number(src, need("value")?)?),
+                "integer" => {
+                    let a = need("value")?;
+                    Value::Int(a.value.trim().parse::<i64>().map_err(|e| {
+                        let why = match e.kind() {
+                            std::num::IntErrorKind::PosOverflow | std::num::IntErrorKind::NegOverflow => "is out of range",
+                            _ => "is not an integer",
+                        };
+                        src.error(a.pos, format!("'{}' {why}", a.value))
+                    })?)
+                }
+                "boolean" => {
+                    let a = need("value")?;
+                    match a.value.trim().to_ascii_lowercase().as_str() {
+                        "true" => Value::Bool(true),
+                        "false" => Value::Bool(false),
+                        _ => return Err(src.error(a.pos, format!("'{}' is not a boolean (true or false)", a.value))),
+                    }
+                }
+                "string" => Value::Str(&need("value")?.value),
+                "rgb" => {
+                    let a = need("value")?;
+                    match numbers(src, a)?.as_slice() {
+                        [v] => Value::Rgb([*v; 3]),
+                        [r, g, b] => Value::Rgb([*r, *g, *b]),
+                        v => return Err(src.error(a.pos, format!("<rgb> needs one or three values, not {}", v.len()))),
+                    }
+                }
+                "spectrum" => {
+                    if c.attr("type").is_some() {
+                        return Err(err(format!("spectrum plugins ({}) are not supported: use <rgb>", c.describe())));
+                    }
+                    if let Some(f) = c.attr("filename") {
+                        return Err(src.error(f.pos, "spectra from files are not supported: use <rgb>"));
+                    }
+                    let a = need("value")?;
+                    if a.value.contains(':') {
+                        return Err(src.error(a.pos, "spectra given as wavelength:value pairs are not supported: use <rgb>"));
+                    }
+                    match numbers(src, a)?.as_slice() {
+                        [v] => Value::Rgb([*v; 3]),
+                        _ => return Err(src.error(a.pos, "a <spectrum> needs a single value here (use <rgb> for colours)")),
+                    }
+                }
+                "point" | "vector" => Value::Vector(vector(src, c, 0.0, true)?),
+                "transform" => Value::Transform(transform(src, c)?),
+                "ref" => {
+                    let a = need("id")?;
+                    let target = ids
+                        .get(a.value.as_str())
+                        .ok_or_else(|| src.error(a.pos, format!("unknown id '{}'", a.value)))?;
+                    Value::Object(target)
+                }
+                "bsdf" | "texture" | "emitter" | "shape" | "sensor" | "film" | "sampler" | "rfilter" | "integrator" | "medium"
+                | "phase" | "volume" => Value::Object(c),
+                "default" | "alias" | "path" => continue,
+                "translate" | "rotate" | "scale" | "matrix" | "lookat" => {
+                    return Err(err(format!("<{}> can only appear inside a <transform>", c.tag)))
+                }
+                "include" => return Err(err("<include> is not supported: paste the included file instead".into())),
+                t => return Err(err(format!("unknown element <{t}>"))),
+            };
+            if !matches!(value, Value::Object(_)) {
+                match c.children.first() {
+                    Some(g) if !matches!(value, Value::Transform(_)) => {
+                        return Err(src.error(g.pos, format!("<{}> cannot appear inside the property <{}>", g.tag, c.tag)))
+                    }
+                    _ => {}
+                }
+                if name.is_none() {
+                    return Err(err(format!("<{}> needs the attribute 'name'", c.tag)));
+                }
+            }
+            if let Some(n) = &name {
+                if items.iter().any(|i| i.name.as_ref() == Some(n)) {
+                    return Err(err(format!("the parameter '{n}' is given twice")));
+                }
+            }
+            items.push(Item {
+                name,
+                value,
+                pos: c.pos,
+                used: Cell::new(false),
+            });
+        }
+        if upgrade && owner.kind() == "diffuse" {
+            for i in &mut items {
+                if i.name.as_deref() == Some("diffuse_reflectance") {
+                    i.name = Some("reflectance".into());
+                }
+            }
+        }
+        Ok(Self {
+            owner,
+            items,
+            src: src.clone(),
+        })
+    }
+
+    /// An error at `pos`.
+    pub fn error(&self, pos: Pos, msg: impl Into<String>) -> SceneError {
+        self.src.error(pos, msg)
+    }
+
+    /// The property `name` (marked as read).
+    pub fn item(&self, name: &str) -> Option<&Item<'t>> {
+        let i = self.items.iter().find(|i| i.name.as_deref() == Some(name))?;
+        i.used.set(true);
+        Some(i)
+    }
+
+    /// Where the property `name` is written, or the plugin's position.
+    pub fn pos(&self, name: &str) -> Pos {
+        self.items
+            .iter()
+            .find(|i| i.name.as_deref() == Some(name))
+            .map_or(self.owner.pos, |i| i.pos)
+    }
+
+    /// True when the property `name` is given.
+    pub fn has(&self, name: &str) -> bool {
+        self.items.iter().any(|i| i.name.as_deref() == Some(name))
+    }
+
+    /// The property `name` as a `T` with its position, `None` when absent, an error when it has
+    /// another type.
+    pub fn get<T: FromValue>(&self, name: &str) -> Result<Option<(T, Pos)>, SceneError> {
+        let Some(i) = self.item(name) else { return Ok(None) };
+        match T::from_value(&i.value) {
+            Some(v) => Ok(Some((v, i.pos))),
+            None => Err(self.error(i.pos, format!("'{name}' must be {}, not {}", T::WHAT, i.value.describe()))),
+        }
+    }
+
+    /// The property `name` as a `T`, or `default`.
+    pub fn or<T: FromValue>(&self, name: &str, default: T) -> Result<T, SceneError> {
+        Ok(self.get(name)?.map_or(default, |(v, _)| v))
+    }
+
+    /// A number that must lie in `range` (inclusive), or `default`.
+    pub fn number_in(&self, name: &str, default: f64, range: (f64, f64)) -> Result<f64, SceneError> {
+        let v = self.or(name, default)?;
+        if !(v >= range.0 && v <= range.1) {
+            return Err(self.error(self.pos(name), format!("'{name}' must be between {} and {}, not {v}", range.0, range.1)));
+        }
+        Ok(v)
+    }
+
+    /// An integer that must lie in `range` (inclusive), or `default`.
+    pub fn int_in(&self, name: &str, default: i64, range: (i64, i64)) -> Result<i64, SceneError> {
+        let v = self.or(name, default)?;
+        if !(range.0..=range.1).contains(&v) {
+            return Err(self.error(self.pos(name), format!("'{name}' must be between {} and {}, not {v}", range.0, range.1)));
+        }
+        Ok(v)
+    }
+
+    /// A lower-case string among `choices` (the first is the default).
+    pub fn choice(&self, name: &str, choices: &[&str]) -> Result<String, SceneError> {
+        let v = self.or(name, choices[0].to_string())?.to_ascii_lowercase();
+        if !choices.contains(&v.as_str()) {
+            return Err(self.error(self.pos(name), format!("'{name}' must be one of {}, not '{v}'", choices.join(", "))));
+        }
+        Ok(v)
+    }
+
+    /// The nested plugins (or `<ref>` targets) with tag `tag`, named or not (marked as read).
+    pub fn objects(&self, tag: &str) -> Vec<(&'t Element, Pos)> {
+        self.items
+            .iter()
+            .filter_map(|i| match i.value {
+                Value::Object(e) if e.tag == tag => {
+                    i.used.set(true);
+                    Some((e, i.pos))
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// At most one nested plugin with tag `tag`.
+    pub fn object(&self, tag: &str) -> Result<Option<(&'t Element, Pos)>, SceneError> {
+        let all = self.objects(tag);
+        if let Some(second) = all.get(1) {
+            return Err(self.error(second.1, format!("{} takes a single <{tag}>", self.owner.describe())));
+        }
+        Ok(all.first().copied())
+    }
+
+    /// Marks parameters that have no effect on candela's image as read.
+    pub fn ignore(&self, names: &[&str]) {
+        for n in names {
+            self.item(n);
+        }
+    }
+
+    /// Warnings for the parameters nobody read (unknown or unsupported), with positions.
+    pub fn unused(&self) -> Vec<(Pos, String)> {
+        let what = self.owner.describe();
+        self.items
+            .iter()
+            .filter(|i| !i.used.get())
+            .map(|i| {
+                let msg = match (&i.name, &i.value) {
+                    (Some(n), _) => format!("{what}: unknown or unsupported parameter '{n}' is ignored"),
+                    (None, Value::Object(e)) => format!("{what}: unexpected nested {} is ignored", e.describe()),
+                    (None, _) => format!("{what}: unnamed property is ignored"),
+                };
+                (i.pos, msg)
+            })
+            .collect()
+    }
+}
+
+/// Mitsuba 0.6's camelCase parameter names → Mitsuba 3's snake_case.
+fn camel_to_underscore(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 4);
+    let mut prev_lower = false;
+    for c in s.chars() {
+        if c.is_ascii_uppercase() && prev_lower {
+            out.push('_');
+        }
+        prev_lower = c.is_ascii_lowercase();
+        out.push(c.to_ascii_lowercase());
+    }
+    out
+}
+
+/// A finite number.
+fn number(src: &SourceFile, a: &Attr) -> Result<f64, SceneError> {
+    parse_number(&a.value).ok_or_else(|| src.error(a.pos, format!("'{}' is not a finite number", a.value)))
+}
+
+fn parse_number(s: &str) -> Option<f64> {
+    s.trim().parse::<f64>().ok().filter(|x| x.is_finite() && x.abs() <= f32::MAX as f64)
+}
+
+/// The numbers of a list separated by commas and/or spaces.
+fn numbers(src: &SourceFile, a: &Attr) -> Result<Vec<f64>, SceneError> {
+    a.value
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| parse_number(t).ok_or_else(|| src.error(a.pos, format!("'{t}' is not a finite number"))))
+        .collect()
+}
+
+/// x, y, z from the attributes `x`, `y`, `z` (missing ones are `default`) or from `value`
+/// (one number for all three, or three numbers).
+fn vector(src: &SourceFile, e: &Element, default: f64, required: bool) -> Result<[f64; 3], SceneError> {
+    if let Some(a) = e.attr("value") {
+        if ["x", "y", "z"].iter().any(|n| e.attr(n).is_some()) {
+            return Err(src.error(a.pos, "use either 'value' or 'x', 'y', 'z', not both"));
+        }
+        return match numbers(src, a)?.as_slice() {
+            [v] => Ok([*v; 3]),
+            [x, y, z] => Ok([*x, *y, *z]),
+            v => Err(src.error(a.pos, format!("'value' needs one or three numbers, not {}", v.len()))),
+        };
+    }
+    let mut out = [default; 3];
+    for (k, n) in ["x", "y", "z"].iter().enumerate() {
+        match e.attr(n) {
+            Some(a) => out[k] = number(src, a)?,
+            None if required => return Err(src.error(e.pos, format!("<{}> needs the attributes 'x', 'y' and 'z' (or 'value')", e.tag))),
+            None => {}
+        }
+    }
+    Ok(out)
+}
+
+/// Three numbers of an attribute such as `origin="0, 0, 1"`.
+fn triple(src: &SourceFile, a: &Attr) -> Result<[f64; 3], SceneError> {
+    match numbers(src, a)?.as_slice() {
+        [x, y, z] => Ok([*x, *y, *z]),
+        v => Err(src.error(a.pos, format!("'{}' needs three numbers, not {}", a.name, v.len()))),
+    }
+}
+
+/// A `<transform>`: its children in order, each applied after the previous ones.
+fn transform(src: &SourceFile, e: &Element) -> Result<M4, SceneError> {
+    let mut m = M4::IDENTITY;
+    for c in &e.children {
+        let err = |msg: &str| src.error(c.pos, msg.to_string());
+        let step = match c.tag.as_str() {
+            "translate" => M4::translate(vector(src, c, 0.0, false)?),
+            "scale" => M4::scale(vector(src, c, 1.0, false)?),
+            "rotate" => {
+                let angle = c.attr("angle").ok_or_else(|| err("<rotate> needs the attribute 'angle' (degrees)"))?;
+                let angle = number(src, angle)?;
+                M4::rotate(vector(src, c, 0.0, false)?, angle).ok_or_else(|| err("the rotation axis is zero"))?
+            }
+            "lookat" => {
+                let get = |n: &str| c.attr(n).ok_or_else(|| err(&format!("<lookat> needs the attribute '{n}'")));
+                let origin = triple(src, get("origin")?)?;
+                let target = triple(src, get("target")?)?;
+                let up = match c.attr("up") {
+                    Some(a) => triple(src, a)?,
+                    None => [0.0; 3],
+                };
+                M4::look_at(origin, target, up).ok_or_else(|| {
+                    err("invalid <lookat>: the origin equals the target, or 'up' is parallel to the viewing direction")
+                })?
+            }
+            "matrix" => {
+                let a = c.attr("value").ok_or_else(|| err("<matrix> needs the attribute 'value'"))?;
+                let v = numbers(src, a)?;
+                M4::from_values(&v).ok_or_else(|| src.error(a.pos, format!("a matrix needs 9 or 16 numbers, not {}", v.len())))?
+            }
+            t => return Err(err(&format!("<{t}> cannot appear inside a <transform>"))),
+        };
+        m = step.mul(&m);
+    }
+    Ok(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn positions_count_characters() {
+        let l = LineIndex::new("ab\n\tcé\nx");
+        assert_eq!(l.pos(0), Pos::new(1, 1));
+        assert_eq!(l.pos(3), Pos::new(2, 1));
+        assert_eq!(l.pos(7), Pos::new(2, 4));
+        assert_eq!(l.pos(9), Pos::new(3, 1));
+        assert_eq!(l.pos(100), Pos::new(3, 2));
+    }
+
+    #[test]
+    fn camel_case_upgrade() {
+        assert_eq!(camel_to_underscore("intIOR"), "int_ior");
+        assert_eq!(camel_to_underscore("diffuseReflectance"), "diffuse_reflectance");
+        assert_eq!(camel_to_underscore("toWorld"), "to_world");
+        assert_eq!(camel_to_underscore("alpha"), "alpha");
+    }
+}
