@@ -13,7 +13,7 @@
 
 use super::{closest, BuildPrim};
 use crate::interaction::Hit;
-use crate::math::{Bounds3, Ray, Vec3, GAMMA3};
+use crate::math::{Bounds3, Ray, GAMMA3};
 use crate::scene::Geometry;
 use crate::shape::ShearedRay;
 use crate::stats::RayStats;
@@ -31,9 +31,9 @@ const STACK: usize = 64;
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub struct BvhNode {
-    min: [f32; 3],
+    /// min x, y, z, then max x, y, z.
+    bounds: [f32; 6],
     offset: u32,
-    max: [f32; 3],
     count: u16,
     axis: u8,
     _pad: u8,
@@ -73,51 +73,22 @@ impl Bvh {
 
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        if self.nodes.is_empty() {
-            return None;
-        }
         let sr = ShearedRay::new(ray);
-        let inv = Vec3::new(1.0 / ray.d.x, 1.0 / ray.d.y, 1.0 / ray.d.z);
-        let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
         let mut r = *ray;
         let mut best: Option<Hit> = None;
-        let mut stack = [0u32; STACK];
-        let mut sp = 0;
-        let mut node = 0usize;
-        let (mut visited, mut tests) = (0u64, 0u64);
-        loop {
-            let n = &self.nodes[node];
-            visited += 1;
-            if hit_box(n, &r, inv) {
-                if n.count > 0 {
-                    let first = n.offset as usize;
-                    for &id in &self.prims[first..first + n.count as usize] {
-                        tests += 1;
-                        if let Some(h) = geometry.intersect_prim(id, &r, &sr) {
-                            if closest(&mut best, h) {
-                                r.tmax = h.t.next_up();
-                            }
-                        }
+        let mut tests = 0u64;
+        let visited = self.traverse(ray, |prims, tmax| {
+            for &id in prims {
+                tests += 1;
+                if let Some(h) = geometry.intersect_prim(id, &r, &sr) {
+                    if closest(&mut best, h) {
+                        r.tmax = h.t.next_up();
+                        *tmax = r.tmax;
                     }
-                } else {
-                    let second = (node + n.offset as usize) as u32;
-                    if neg[n.axis as usize] {
-                        stack[sp] = node as u32 + 1;
-                        node = second as usize;
-                    } else {
-                        stack[sp] = second;
-                        node += 1;
-                    }
-                    sp += 1;
-                    continue;
                 }
             }
-            if sp == 0 {
-                break;
-            }
-            sp -= 1;
-            node = stack[sp] as usize;
-        }
+            false
+        });
         stats.nodes += visited;
         stats.prim_tests += tests;
         best
@@ -125,32 +96,47 @@ impl Bvh {
 
     /// True when any primitive is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
         let sr = ShearedRay::new(ray);
-        let inv = Vec3::new(1.0 / ray.d.x, 1.0 / ray.d.y, 1.0 / ray.d.z);
-        let neg = [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0];
+        let mut tests = 0u64;
+        let mut found = false;
+        let visited = self.traverse(ray, |prims, _| {
+            found = prims.iter().any(|&id| {
+                tests += 1;
+                geometry.intersect_prim(id, ray, &sr).is_some()
+            });
+            found
+        });
+        stats.nodes += visited;
+        stats.prim_tests += tests;
+        found
+    }
+
+    /// Visits the leaves whose boxes the ray crosses, near child first, calling `leaf` with the
+    /// leaf's primitives and the current far end of the ray (which `leaf` may shorten); stops
+    /// when `leaf` returns true. Returns the number of nodes visited.
+    #[inline(always)]
+    fn traverse(&self, ray: &Ray, mut leaf: impl FnMut(&[u32], &mut f32) -> bool) -> u64 {
+        if self.nodes.is_empty() {
+            return 0;
+        }
+        let rd = RayData::new(ray);
+        let mut tmax = ray.tmax;
         let mut stack = [0u32; STACK];
         let mut sp = 0;
         let mut node = 0usize;
-        let (mut visited, mut tests) = (0u64, 0u64);
-        let found = loop {
+        let mut visited = 0u64;
+        loop {
             let n = &self.nodes[node];
             visited += 1;
-            if hit_box(n, ray, inv) {
+            if rd.hits(n, ray.tmin, tmax) {
                 if n.count > 0 {
                     let first = n.offset as usize;
-                    let prims = &self.prims[first..first + n.count as usize];
-                    if prims.iter().any(|&id| {
-                        tests += 1;
-                        geometry.intersect_prim(id, ray, &sr).is_some()
-                    }) {
-                        break true;
+                    if leaf(&self.prims[first..first + n.count as usize], &mut tmax) {
+                        return visited;
                     }
                 } else {
                     let second = (node + n.offset as usize) as u32;
-                    if neg[n.axis as usize] {
+                    if rd.neg[n.axis as usize] {
                         stack[sp] = node as u32 + 1;
                         node = second as usize;
                     } else {
@@ -162,35 +148,55 @@ impl Bvh {
                 }
             }
             if sp == 0 {
-                break false;
+                return visited;
             }
             sp -= 1;
             node = stack[sp] as usize;
-        };
-        stats.nodes += visited;
-        stats.prim_tests += tests;
-        found
+        }
     }
 }
 
-/// The slab test of a node's box against the ray's interval (pbrt's robust version: the far
-/// distance grows by 2γ₃ to cover round-off).
-#[inline(always)]
-fn hit_box(n: &BvhNode, r: &Ray, inv: Vec3) -> bool {
-    let o = [r.o.x, r.o.y, r.o.z];
-    let inv = [inv.x, inv.y, inv.z];
-    let mut t0 = r.tmin;
-    let mut t1 = r.tmax;
-    for a in 0..3 {
-        let ta = (n.min[a] - o[a]) * inv[a];
-        let tb = (n.max[a] - o[a]) * inv[a];
-        let (near, far) = if ta < tb { (ta, tb) } else { (tb, ta) };
-        let far = far * (1.0 + 2.0 * GAMMA3);
-        // NaN (0·∞ on a slab boundary) never narrows the interval.
-        t0 = if near > t0 { near } else { t0 };
-        t1 = if far < t1 { far } else { t1 };
+/// A ray prepared for slab tests: origin, inverse direction, and for each axis the index in a
+/// node's `bounds` of the plane crossed first (`near`) and last (`far`).
+struct RayData {
+    o: [f32; 3],
+    inv: [f32; 3],
+    near: [usize; 3],
+    far: [usize; 3],
+    neg: [bool; 3],
+}
+
+impl RayData {
+    #[inline(always)]
+    fn new(r: &Ray) -> Self {
+        let inv = [1.0 / r.d.x, 1.0 / r.d.y, 1.0 / r.d.z];
+        let neg = [inv[0] < 0.0, inv[1] < 0.0, inv[2] < 0.0];
+        let near = [neg[0] as usize * 3, 1 + neg[1] as usize * 3, 2 + neg[2] as usize * 3];
+        Self {
+            o: [r.o.x, r.o.y, r.o.z],
+            inv,
+            near,
+            far: [3 - near[0], 5 - near[1], 7 - near[2]],
+            neg,
+        }
     }
-    t0 <= t1
+
+    /// The slab test of a node's box against `[tmin, tmax]` (pbrt's robust version: the far
+    /// distance grows by 2γ₃ to cover round-off). The comparisons are written so that a NaN
+    /// (0·∞ on a slab boundary) never narrows the interval, and compile to plain min/max.
+    #[inline(always)]
+    fn hits(&self, n: &BvhNode, tmin: f32, tmax: f32) -> bool {
+        let b = &n.bounds;
+        let mut t0 = tmin;
+        let mut t1 = tmax;
+        for a in 0..3 {
+            let tn = (b[self.near[a]] - self.o[a]) * self.inv[a];
+            let tf = (b[self.far[a]] - self.o[a]) * self.inv[a];
+            t0 = if tn > t0 { tn } else { t0 };
+            t1 = if tf < t1 { tf } else { t1 };
+        }
+        t0 <= t1 * (1.0 + 2.0 * GAMMA3)
+    }
 }
 
 /// Builds the subtree over `prims` (whose first element has index `base` in the final
@@ -241,9 +247,8 @@ fn join(prims: &mut [BuildPrim], base: usize, mid: usize, bounds: Bounds3, axis:
 
 fn node(b: Bounds3, offset: u32, count: u16, axis: u8) -> BvhNode {
     BvhNode {
-        min: b.min.to_array(),
+        bounds: [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
         offset,
-        max: b.max.to_array(),
         count,
         axis,
         _pad: 0,

@@ -78,7 +78,7 @@ impl Sampler {
                 let s = hash_u32(seed, self.dim);
                 self.dim += 1;
                 let i = nested_uniform_scramble(self.index, s);
-                to_unit(nested_uniform_scramble(i.reverse_bits(), s ^ 0x5bd1e995))
+                to_unit(nested_uniform_scramble(i.reverse_bits(), mix32(s ^ 0x5bd1_e995)))
             }
             None => self.rng.next_f32(),
         }
@@ -92,8 +92,8 @@ impl Sampler {
                 let s = hash_u32(seed, self.dim);
                 self.dim += 2;
                 let i = nested_uniform_scramble(self.index, s);
-                let x = nested_uniform_scramble(i.reverse_bits(), hash_u32(s, 0));
-                let y = nested_uniform_scramble(sobol_dim1(i), hash_u32(s, 1));
+                let x = nested_uniform_scramble(i.reverse_bits(), mix32(s ^ 0x5bd1_e995));
+                let y = nested_uniform_scramble(sobol_dim1(i), mix32(s ^ 0x27d4_eb2f));
                 [to_unit(x), to_unit(y)]
             }
             None => {
@@ -114,19 +114,41 @@ impl Sampler {
     }
 }
 
-/// The second dimension of the Sobol sequence (direction numbers v_k = v_{k−1} ⊕ v_{k−1}/2).
+/// The second dimension of the Sobol sequence (direction numbers v_k = v_{k−1} ⊕ v_{k−1}/2),
+/// a byte of the index at a time.
 #[inline]
-fn sobol_dim1(mut i: u32) -> u32 {
-    let mut v = 1u32 << 31;
-    let mut r = 0;
-    while i != 0 {
-        if i & 1 != 0 {
-            r ^= v;
+fn sobol_dim1(i: u32) -> u32 {
+    const fn table() -> [[u32; 256]; 4] {
+        // The direction numbers of bits 0..32.
+        let mut v = [0u32; 32];
+        v[0] = 1 << 31;
+        let mut k = 1;
+        while k < 32 {
+            v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+            k += 1;
         }
-        i >>= 1;
-        v ^= v >> 1;
+        let mut t = [[0u32; 256]; 4];
+        let mut byte = 0;
+        while byte < 4 {
+            let mut b = 0;
+            while b < 256 {
+                let mut r = 0;
+                let mut bit = 0;
+                while bit < 8 {
+                    if b & (1 << bit) != 0 {
+                        r ^= v[byte * 8 + bit];
+                    }
+                    bit += 1;
+                }
+                t[byte][b] = r;
+                b += 1;
+            }
+            byte += 1;
+        }
+        t
     }
-    r
+    static TABLE: [[u32; 256]; 4] = table();
+    TABLE[0][(i & 0xff) as usize] ^ TABLE[1][((i >> 8) & 0xff) as usize] ^ TABLE[2][((i >> 16) & 0xff) as usize] ^ TABLE[3][(i >> 24) as usize]
 }
 
 /// Laine and Karras' hash-based permutation, which only lets bits influence higher bits.
@@ -146,9 +168,20 @@ fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
     laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
 
+/// A 32-bit integer hash with low bias (Chris Wellons' "lowbias32").
 #[inline]
-fn hash_u32(a: u32, b: u32) -> u32 {
-    hash2(a as u64, b as u64) as u32
+fn mix32(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^ (x >> 16)
+}
+
+/// Combines a seed and a dimension into a new seed.
+#[inline]
+fn hash_u32(seed: u32, dim: u32) -> u32 {
+    mix32(seed ^ mix32(dim.wrapping_mul(0x9e37_79b9).wrapping_add(0x632b_e5ab)))
 }
 
 #[inline]

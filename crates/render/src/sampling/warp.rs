@@ -85,6 +85,33 @@ pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
     1.0 / (2.0 * PI * (1.0 - cos_max))
 }
 
+/// 1 − cos θ for sin²θ = `sin2` (θ ≤ 90°), computed as sin²θ/(1 + cos θ): `1 − √(1 − sin²θ)`
+/// cancels catastrophically in f32 for small angles (a sphere of radius 1 seen from 1000 away
+/// has 1 − cos θ = 5e-7, below the spacing of f32 numbers near 1).
+#[inline]
+pub fn one_minus_cos_from_sin2(sin2: f32) -> f32 {
+    let s = sin2.clamp(0.0, 1.0);
+    s / (1.0 + (1.0 - s).sqrt())
+}
+
+/// Uniform direction in the cone around +z whose half-angle θ_max is given by
+/// `one_minus_cos_max` = 1 − cos θ_max (see [`one_minus_cos_from_sin2`]); unlike
+/// [`square_to_uniform_cone`] it stays accurate for tiny cones.
+#[inline]
+pub fn square_to_uniform_cone_narrow(u: [f32; 2], one_minus_cos_max: f32) -> Vec3 {
+    // a = 1 − cos θ, uniform in [0, 1 − cos θ_max]; sin θ = √(a(2 − a)) without cancellation.
+    let a = u[0] * one_minus_cos_max;
+    let r = safe_sqrt(a * (2.0 - a));
+    let phi = 2.0 * PI * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), 1.0 - a)
+}
+
+/// The pdf of [`square_to_uniform_cone_narrow`]: 1/(2π(1 − cos θ_max)).
+#[inline]
+pub fn uniform_cone_pdf_narrow(one_minus_cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * one_minus_cos_max)
+}
+
 /// Uniform barycentric coordinates (b1, b2) on a triangle (the square-root parametrisation);
 /// the pdf is 1/area of the triangle.
 #[inline]
