@@ -111,7 +111,10 @@ fn mf(dist: Distribution, alpha: f32) -> Microfacet {
 enum Family {
     Lambert,
     Conductor,
+    /// Rough dielectrics seen from outside (η = 1.5 and 1/1.5).
     Dielectric,
+    /// Rough dielectrics seen from inside.
+    DielectricInside,
     Plastic,
     Phong,
     CookTorrance,
@@ -192,9 +195,18 @@ fn cases() -> Vec<Case> {
                     }
                     let t_axis =
                         refract_z(wo, eta).unwrap_or(if inside { Vec3::Z } else { -Vec3::Z });
-                    let p = power(alpha < 0.5);
+                    // Wide lobes: one equal-area grid around the normal covers both.
+                    let grids = if alpha < 0.5 {
+                        vec![(reflect_z(wo), 2.0), (t_axis, 2.0)]
+                    } else {
+                        vec![(Vec3::Z, 1.0)]
+                    };
                     v.push(Case {
-                        family: Family::Dielectric,
+                        family: if inside {
+                            Family::DielectricInside
+                        } else {
+                            Family::Dielectric
+                        },
                         name: format!(
                             "rough dielectric {dn} α={alpha} η={eta:.4} {} θo={th}°",
                             if inside { "inside" } else { "outside" }
@@ -206,7 +218,7 @@ fn cases() -> Vec<Case> {
                             mf: Some(mf(dist, alpha)),
                         }),
                         wo,
-                        grids: vec![(reflect_z(wo), p), (t_axis, p)],
+                        grids,
                         mass: None,
                     });
                 }
@@ -377,10 +389,18 @@ fn chi2_rough_conductor() {
 
 // Walter et al.'s rough dielectric: reflection chosen with probability F, refraction through
 // the sampled microfacet; the density (with the refraction Jacobian η′²|wi·m|/(wo·m + η′ wi·m)²)
-// matches the samples over the whole sphere, from outside and from inside the medium.
+// matches the samples over the whole sphere, seen from outside (η = 1.5, and an interface of
+// index 1/1.5).
 #[test]
-fn chi2_rough_dielectric() {
+fn chi2_rough_dielectric_from_outside() {
     run_family(Family::Dielectric);
+}
+
+// The same from inside the medium (relative index 1/1.5 along wo), where total internal
+// reflection forbids refraction beyond the critical angle except through tilted microfacets.
+#[test]
+fn chi2_rough_dielectric_from_inside() {
+    run_family(Family::DielectricInside);
 }
 
 // Smooth plastic's diffuse samples (the coating's delta excluded) have the density
@@ -793,9 +813,11 @@ fn albedo(bsdf: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
 // more than it receives, ∫ f cos dω ≤ 1 within 3 standard errors, at every incident angle.
 // The lossless delta models conserve exactly: the white mirror, the ideal conductor and the
 // white smooth dielectric (R + T with the η² radiance scaling removed) have albedo 1. The white
-// rough dielectric and the ideal rough conductor lose energy to single scattering (the paths
-// that the shadowing term G removes), more with rougher surfaces. The normalised Phong and
-// Blinn–Phong lobes reach albedo 1 at normal incidence (kd = 0, ks = 1).
+// rough dielectric (from both sides) and the ideal rough conductor lose energy to single
+// scattering (the paths that the shadowing term G removes), more with rougher surfaces and at
+// grazing angles. The normalised Phong and Blinn–Phong lobes reach albedo 1 at normal
+// incidence (kd = 0, ks = 1). The white smooth plastic may exceed 1 by the 0.1 % error of the
+// fitted hemispherical Fresnel averages its normalisation uses (Mitsuba's fits).
 #[test]
 fn energy_conservation() {
     let fr = frame();
@@ -900,10 +922,14 @@ fn energy_conservation() {
                 failures.push(format!("{name} θo={th}°: albedo {a:.5} ± {se:.5} > 1"));
             }
             // Normalised Phong-type lobes: albedo 1 at normal incidence.
-            if th == 0.0 && name.contains("phong") && name.contains("kd=0 ") {
-                if (a - 1.0).abs() > 0.01 {
-                    failures.push(format!("{name}: albedo at normal incidence {a:.5}, expected 1 for a normalised lobe"));
-                }
+            if th == 0.0
+                && name.contains("phong")
+                && name.contains("kd=0 ")
+                && (a - 1.0).abs() > 0.01
+            {
+                failures.push(format!(
+                    "{name}: albedo at normal incidence {a:.5}, expected 1 for a normalised lobe"
+                ));
             }
             // White Lambert: exactly 1.
             if name == "lambert" && (a - 1.0).abs() > 1e-6 {
@@ -919,6 +945,22 @@ fn energy_conservation() {
                 failures.push(format!(
                     "{name} θo={th}°: albedo {a:.4} shows no single-scattering loss"
                 ));
+            }
+        }
+        // Dielectrics from inside too (beyond the critical angle only rough microfacets let
+        // light out).
+        if name.starts_with("rough dielectric") {
+            row += " | inside:";
+            for th in [0.0f32, 30.0, 60.0, 85.0] {
+                let mut wl = local(th, 20.0);
+                wl.z = -wl.z;
+                let (a, se) = albedo(&b, fr.to_world(wl), n, seed(name) ^ th.to_bits() as u64 ^ 1);
+                row += &format!(" {a:.4}±{se:.4}");
+                if a > 1.0 + 3.0 * se + slack + 1e-5 {
+                    failures.push(format!(
+                        "{name} inside θo={th}°: albedo {a:.5} ± {se:.5} > 1"
+                    ));
+                }
             }
         }
         lines.push(row);

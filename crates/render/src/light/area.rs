@@ -168,11 +168,12 @@ impl AreaLight {
         if let AreaShape::Sphere { sphere, cone: Some((c, r)) } = &self.shape {
             let d2 = p.squared_distance(*c);
             if d2 > r * r * 1.0001 {
-                // Sample the cone of directions the sphere subtends.
-                let cos_max = (1.0 - r * r / d2).max(0.0).sqrt();
+                // Sample the cone of directions the sphere subtends (1 − cos θ_max from
+                // sin²θ_max = r²/d², exact for the tiny cones of small, distant spheres).
+                let one_minus_cos = warp::one_minus_cos_from_sin2(r * r / d2);
                 let axis = (*c - p) / d2.sqrt();
                 let frame = crate::math::Frame::from_normal(axis.to_normal());
-                let wi = frame.to_world(warp::square_to_uniform_cone(u, cos_max)).normalize();
+                let wi = frame.to_world(warp::square_to_uniform_cone_narrow(u, one_minus_cos)).normalize();
                 let ray = crate::math::Ray::new(p, wi);
                 let t = match sphere.crossings(&ray) {
                     Some((t0, _)) if t0 > 0.0 => t0,
@@ -185,7 +186,7 @@ impl AreaLight {
                 return Some(LightSample {
                     wi,
                     li,
-                    pdf: warp::uniform_cone_pdf(cos_max),
+                    pdf: warp::uniform_cone_pdf_narrow(one_minus_cos),
                     delta: false,
                     target: Target::Surface(g.p, g.n),
                 });
@@ -219,7 +220,7 @@ impl AreaLight {
                 if let Some((c, r)) = cone {
                     let d2 = p.squared_distance(*c);
                     if d2 > r * r * 1.0001 {
-                        return warp::uniform_cone_pdf((1.0 - r * r / d2).max(0.0).sqrt());
+                        return warp::uniform_cone_pdf_narrow(warp::one_minus_cos_from_sin2(r * r / d2));
                     }
                 }
                 let ql = sphere.world_from_object.inv_point(q).to_vec();

@@ -4,19 +4,24 @@
 //!
 //! Directions are binned on a spherical grid around an axis: rows in s ∈ [0, 1] with
 //! cos θ = 1 − 2 s^p (p = 1: equal-area rows; p = 2: s = sin(θ/2), rows nearly uniform in θ,
-//! which resolves narrow lobes around the axis), columns uniform in φ. One more cell holds the
-//! samples that returned no direction (`None`). The expected count of every cell is N times the
-//! integral of the density over it, computed by adaptive Gauss–Legendre cubature (each cell is
-//! split until the estimate changes by much less than one standard deviation of its count);
-//! the "no direction" cell expects N·(1 − ∫ pdf). Cells expecting fewer than 5 samples are pooled
-//! (ascending order, Mitsuba's procedure), the statistic is compared with the χ² distribution of
-//! (cells − 1) degrees of freedom and the hypothesis is rejected below the significance level
-//! 1 − (1 − α)^(1/m) (Šidák's correction for m tests at overall level α).
+//! which resolves narrow lobes around the axis), columns uniform in φ. The expected count of a
+//! cell is N times the integral of the density over it, by adaptive Gauss–Legendre cubature
+//! (cells are split until the 4 × 4 and 3 × 3 rules agree within a small fraction of one
+//! standard deviation of their count, and at least three times where they may straddle a step
+//! of the density; cells whose counts are far from expectation are integrated again 16 × 16
+//! times finer before judging). Cells expecting fewer than 5 samples are pooled (in ascending
+//! order of expectation, Mitsuba's procedure), the statistic is compared with the χ²
+//! distribution of (cells − 1) degrees of freedom (p-value by the regularised incomplete gamma
+//! function) and the hypothesis is rejected below the significance level 1 − (1 − α)^(1/m)
+//! (Šidák's correction for m tests at overall level α).
 //!
-//! Besides the statistic, the test checks that the density reported with each sample equals the
-//! density function (relative 1e-3), that no density is negative or NaN, and that the sampled
-//! mass (fraction of samples returning a direction) agrees with ∫ pdf dω, and with the mass the
-//! caller intends when it states one.
+//! Samples may return no direction (`None`): a microfacet sample below the horizon, the delta
+//! part of a BSDF that the caller excludes, an emitter's hidden side. The fraction of samples
+//! that return a direction must equal ∫ pdf dω (5 binomial standard deviations + 1e-3 for the
+//! cubature), and the mass the caller intends when it states one (e.g. exactly 1). The density
+//! reported with the samples (every 4th) must equal the density function (relative 1e-3, or
+//! within what f32 rounding of the direction changes at ill-conditioned points; at most 2e-4 of
+//! them may disagree, at numerically ambiguous points), and no density may be negative or NaN.
 #![allow(dead_code)]
 
 use candela_render::math::{Frame, Vec3};
@@ -134,13 +139,15 @@ pub struct Chi2<'a> {
     pub level: f64,
 }
 
-/// 4-point Gauss–Legendre nodes and weights on [-1, 1].
+/// 4- and 3-point Gauss–Legendre nodes and weights on [-1, 1].
 const GL_X: [f64; 4] = [
     -0.861_136_311_594_052_6,
     -0.339_981_043_584_856_3,
     0.339_981_043_584_856_3,
     0.861_136_311_594_052_6,
 ];
+const GL3_X: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
+const GL3_W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
 const GL_W: [f64; 4] = [
     0.347_854_845_137_453_8,
     0.652_145_154_862_546_1,
@@ -167,23 +174,26 @@ impl Chi2<'_> {
         let mut rng = Pcg32::new(self.seed, 0x5eed);
         let mut pdf_mismatch: Option<(Vec3, f32, f32)> = None;
         let mut mismatches = 0usize;
-        for _ in 0..n {
+        let mut checked = 0usize;
+        for i in 0..n {
             let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
             match sample(u) {
                 Some((d, p)) => {
-                    if !d.is_finite()
-                        || !(p.is_finite() && p > 0.0)
-                        || (d.norm() - 1.0).abs() > 1e-3
-                    {
+                    let valid = d.is_finite() && p.is_finite() && p > 0.0;
+                    if !valid || (d.norm() - 1.0).abs() > 1e-3 {
                         return fail(format!(
                             "sample({u:?}) returned the direction {d:?} with density {p}"
                         ));
                     }
-                    let q = pdf(d);
-                    if !agrees_up_to_rounding(p, d, 1e-3, &pdf) {
-                        mismatches += 1;
-                        if pdf_mismatch.is_none() {
-                            pdf_mismatch = Some((d, p, q));
+                    // The reported density is checked on every 4th sample (the others only
+                    // cost time).
+                    if i % 4 == 0 {
+                        checked += 1;
+                        if !agrees_up_to_rounding(p, d, 1e-3, &pdf) {
+                            mismatches += 1;
+                            if pdf_mismatch.is_none() {
+                                pdf_mismatch = Some((d, p, pdf(d)));
+                            }
                         }
                     }
                     observed[g.cell(&frame, d)] += 1.0;
@@ -191,10 +201,13 @@ impl Chi2<'_> {
                 None => observed[cells] += 1.0,
             }
         }
-        if mismatches as f64 > 1e-5 * n as f64 {
+        // Rare mismatches remain at numerically ambiguous points (a ray grazing a silhouette
+        // misses the emitter, a direction on the edge of a texel maps back to its neighbour);
+        // a wrong density disagrees on a large fraction.
+        if mismatches as f64 > 2e-4 * checked as f64 + 1.0 {
             let (d, p, q) = pdf_mismatch.unwrap();
             return fail(format!(
-                "{mismatches} of {n} samples report a density different from pdf(); e.g. {d:?}: sample says {p}, pdf says {q}"
+                "{mismatches} of {checked} samples report a density different from pdf(); e.g. {d:?}: sample says {p}, pdf says {q}"
             ));
         }
 
@@ -217,16 +230,34 @@ impl Chi2<'_> {
             // dω = |d cos θ/ds| ds dφ.
             v as f64 * 2.0 * g.power * s.powf(g.power - 1.0)
         };
-        let gauss = |s0: f64, s1: f64, p0: f64, p1: f64, bad: &mut Option<(Vec3, f32)>| -> f64 {
+        // 4 × 4 and 3 × 3 Gauss–Legendre on a rectangle of (s, φ) (their difference estimates
+        // the error), and whether it may straddle a step of the density (the edge of its
+        // support, a jump by more than 8× such as a texel's edge).
+        let gauss = |s0: f64, s1: f64, p0: f64, p1: f64, bad: &mut Option<(Vec3, f32)>| -> Quad {
             let (hs, hp) = (0.5 * (s1 - s0), 0.5 * (p1 - p0));
             let (ms, mp) = (0.5 * (s1 + s0), 0.5 * (p1 + p0));
-            let mut sum = 0.0;
+            let (mut g4, mut g3, mut lo, mut hi) = (0.0, 0.0, f64::INFINITY, 0f64);
+            let mut node = |x: f64, y: f64, bad: &mut Option<(Vec3, f32)>| {
+                let v = integrand(ms + hs * x, mp + hp * y, bad);
+                lo = lo.min(v);
+                hi = hi.max(v);
+                v
+            };
             for i in 0..4 {
                 for j in 0..4 {
-                    sum += GL_W[i] * GL_W[j] * integrand(ms + hs * GL_X[i], mp + hp * GL_X[j], bad);
+                    g4 += GL_W[i] * GL_W[j] * node(GL_X[i], GL_X[j], bad);
                 }
             }
-            sum * hs * hp
+            for i in 0..3 {
+                for j in 0..3 {
+                    g3 += GL3_W[i] * GL3_W[j] * node(GL3_X[i], GL3_X[j], bad);
+                }
+            }
+            Quad {
+                g4: g4 * hs * hp,
+                g3: g3 * hs * hp,
+                step: hi > 0.0 && hi > 8.0 * lo,
+            }
         };
         // The cubature of a rectangle of (s, φ), split into k × k parts refined adaptively.
         let cubature =
@@ -240,7 +271,7 @@ impl Chi2<'_> {
                         let whole = gauss(a, b, c, d, bad);
                         // Tolerance on the count: 5 % of its standard deviation, at least 1e-3
                         // samples.
-                        let tol = (0.05 * (whole.abs() * n as f64).sqrt()).max(1e-3) / n as f64;
+                        let tol = (0.05 * (whole.g4.abs() * n as f64).sqrt()).max(1e-3) / n as f64;
                         sum += adaptive(&gauss, a, b, c, d, whole, tol, 0, bad);
                     }
                 }
@@ -276,26 +307,33 @@ impl Chi2<'_> {
             return fail(format!("pdf({d:?}) = {v} (negative or not finite)"));
         }
 
-        // The sampled mass and the density's integral must agree.
+        // The sampled mass and the density's integral must agree (the cubature is good to
+        // ~1e-3 of the total: support edges cut across cells), and both must equal the
+        // intended mass when there is one.
         let sampled_mass = 1.0 - observed[cells] / n as f64;
-        let sigma =
-            (total.clamp(1e-9, 1.0) * (1.0 - total.clamp(0.0, 1.0 - 1e-9)) / n as f64).sqrt();
-        if (sampled_mass - total).abs() > 5.0 * sigma + 2e-3 {
+        let binomial = |m: f64| (m.clamp(0.0, 1.0) * (1.0 - m.clamp(0.0, 1.0)) / n as f64).sqrt();
+        if (sampled_mass - total).abs() > 5.0 * binomial(total) + 1e-3 {
             return fail(format!(
                 "the sampler returns a direction with probability {sampled_mass:.5} but the density integrates to {total:.5}"
             ));
         }
         if let Some(m) = self.expected_mass {
-            if (total - m).abs() > 2e-3 {
+            if (total - m).abs() > 1e-3 {
                 return fail(format!(
                     "the density integrates to {total:.5}, not to the intended mass {m}"
                 ));
             }
+            if (sampled_mass - m).abs() > 5.0 * binomial(m) + 1e-5 {
+                return fail(format!(
+                    "the sampler returns a direction with probability {sampled_mass:.6}, not with the intended {m}"
+                ));
+            }
         }
-        expected[cells] = n as f64 * (1.0 - total).max(0.0);
 
         // Pool the cells expecting < 5 samples, in ascending order of expectation.
-        let mut order: Vec<usize> = (0..=cells).collect();
+        // (The "no direction" cell is left out: its expectation N·(1 − ∫pdf) inherits the
+        // cubature's error on the whole sphere; it was judged above.)
+        let mut order: Vec<usize> = (0..cells).collect();
         order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
         let (mut chi2, mut dof_cells) = (0.0, 0usize);
         let (mut pool_obs, mut pool_exp) = (0.0, 0.0);
@@ -344,36 +382,45 @@ impl Chi2<'_> {
     }
 }
 
-/// Refines the cubature of a cell until halving it changes the estimate by less than `tol`
-/// (each quarter gets half the tolerance: along a discontinuity the error halves per level).
+/// The two cubatures of a rectangle and whether it may straddle a step.
+#[derive(Clone, Copy)]
+struct Quad {
+    g4: f64,
+    g3: f64,
+    step: bool,
+}
+
+/// Refines the cubature of a rectangle until its 4 × 4 and 3 × 3 rules agree within `tol`,
+/// splitting it in four otherwise (each quarter gets half the tolerance: along a discontinuity
+/// the error halves per level). Rectangles that may straddle a step of the density are split at
+/// least three times: there the two rules can agree by chance (both are staircases of the step).
 fn adaptive(
-    gauss: &impl Fn(f64, f64, f64, f64, &mut Option<(Vec3, f32)>) -> f64,
+    gauss: &impl Fn(f64, f64, f64, f64, &mut Option<(Vec3, f32)>) -> Quad,
     s0: f64,
     s1: f64,
     p0: f64,
     p1: f64,
-    whole: f64,
+    q: Quad,
     tol: f64,
     depth: u32,
     bad: &mut Option<(Vec3, f32)>,
 ) -> f64 {
+    if depth >= 7 || ((q.g4 - q.g3).abs() <= tol && !(q.step && depth < 3)) {
+        return q.g4;
+    }
     let (sm, pm) = (0.5 * (s0 + s1), 0.5 * (p0 + p1));
-    let quads = [
+    [
         (s0, sm, p0, pm),
         (sm, s1, p0, pm),
         (s0, sm, pm, p1),
         (sm, s1, pm, p1),
-    ];
-    let parts = quads.map(|(a, b, c, d)| gauss(a, b, c, d, bad));
-    let sum: f64 = parts.iter().sum();
-    if depth >= 6 || (sum - whole).abs() <= tol {
-        return sum;
-    }
-    quads
-        .iter()
-        .zip(parts)
-        .map(|(&(a, b, c, d), w)| adaptive(gauss, a, b, c, d, w, 0.5 * tol, depth + 1, bad))
-        .sum()
+    ]
+    .iter()
+    .map(|&(a, b, c, d)| {
+        let q = gauss(a, b, c, d, bad);
+        adaptive(gauss, a, b, c, d, q, 0.5 * tol, depth + 1, bad)
+    })
+    .sum()
 }
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, 9 terms; ~1e-15 relative).
