@@ -35,13 +35,13 @@ pub struct RenderArgs {
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub outputs: Vec<PathBuf>,
     /// Image width in pixels (default 640, or the XML film's).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIZE))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=MAX_SIZE))]
     pub width: Option<u32>,
     /// Image height in pixels (default 480, or the XML film's).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIZE))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=MAX_SIZE))]
     pub height: Option<u32>,
     /// Samples per pixel (default 1, or the XML's sample_count): 1 goes through the pixel centre.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP))]
     pub spp: Option<u32>,
     /// The integrator.
     #[arg(long, value_name = "NAME")]
@@ -50,7 +50,7 @@ pub struct RenderArgs {
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(i32).range(-1..=100_000))]
     pub max_depth: Option<i32>,
     /// The course's branching factor for `path`.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub num_of_rays: Option<u32>,
     /// The acceleration structure: bvh (default), kdtree, grid, octree, none.
     #[arg(long, value_name = "NAME")]
@@ -62,7 +62,7 @@ pub struct RenderArgs {
     #[arg(short = 'd', long = "define", value_name = "NAME=VALUE")]
     pub defines: Vec<String>,
     /// Radiosity: largest patch edge (default from the scene's size).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_f32)]
     pub patch_size: Option<f32>,
     /// Radiosity: hemicube | raycast.
     #[arg(long, value_name = "METHOD")]
@@ -74,7 +74,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub radiosity_cache: Option<PathBuf>,
     /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
     /// Print rays traced, time and Mrays/s.
     #[arg(long)]
@@ -89,14 +89,14 @@ pub struct RenderArgs {
 #[derive(Args, Debug, Clone)]
 pub struct ToneArgs {
     /// Tone mapping: the key value a (course default 0.18).
-    #[arg(long, default_value_t = 0.18, value_parser = positive_f32)]
+    #[arg(long, default_value_t = 0.18, allow_negative_numbers = true, value_parser = positive_f32)]
     pub factor: f32,
     /// Tone mapping: the display gamma γ (default 1.0 for `convert`, as in the course; 2.2 for
     /// `render` and `demo`).
-    #[arg(long, value_parser = positive_f32)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_f32)]
     pub gamma: Option<f32>,
     /// Tone mapping: the average luminosity ⟨l⟩ to use instead of the image's.
-    #[arg(long, value_parser = positive_f32)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive_f32)]
     pub luminosity: Option<f32>,
     /// Tone mapping: encode with the sRGB curve instead of the gamma power.
     #[arg(long)]
