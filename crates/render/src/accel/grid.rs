@@ -1,13 +1,18 @@
 //! Uniform grid (`--accel grid`): the scene box cut into equal cells, traversed by 3D-DDA.
 //!
 //! Build: the resolution follows the primitive count, about [`CELLS_PER_PRIM`] cells per
-//! primitive, with cells as close to cubes as the box allows (an axis with too little extent
-//! gets one cell and the others share the budget), at most [`MAX_RES`] per axis. Every primitive
-//! is referenced from each cell its box, grown by the margin (`accel::margin`), overlaps
-//! (inclusive, so a primitive touching a cell boundary goes into both cells). The cell lists are
-//! stored in CSR form: `offsets[c]..offsets[c + 1]` indexes `prims`. When the references would
-//! exceed [`MAX_REFS_PER_PRIM`] per primitive (many huge primitives), the resolution is halved
-//! until they do not.
+//! primitive (λ), with cells as close to cubes as the box allows (an axis with too little
+//! extent gets one cell and the others share the budget), at most [`MAX_RES`] per axis and
+//! [`MAX_CELLS`] in all. Primitives on a surface crowd a thin shell of cells; when the occupied
+//! cells then average more than [`DENSE_CELL`] references, the resolution is raised once, by
+//! the square root of the excess (the count per occupied cell falls with the square of the
+//! resolution), within [`MAX_CELLS`]. When the references would exceed [`MAX_REFS_PER_PRIM`]
+//! per primitive (many huge primitives), the resolution is halved until they do not.
+//!
+//! Every primitive is referenced from each cell its box, grown by the margin (`accel::margin`),
+//! overlaps (inclusive, so a primitive touching a cell boundary goes into both cells). The cell
+//! lists are stored in CSR form: `offsets[c]..offsets[c + 1]` indexes `prims`, with one
+//! occupancy bit per cell so that empty cells are skipped without reading the offsets.
 //!
 //! Traversal: the 3D digital differential analyser of Amanatides and Woo ("A Fast Voxel
 //! Traversal Algorithm for Ray Tracing", Eurographics 1987) walks the cells pierced by the ray
@@ -27,7 +32,11 @@ use crate::stats::RayStats;
 /// Target number of cells per primitive (λ).
 pub const CELLS_PER_PRIM: f32 = 4.0;
 /// Largest resolution along one axis.
-pub const MAX_RES: u32 = 256;
+pub const MAX_RES: u32 = 512;
+/// Largest number of cells (64 MiB of offsets).
+pub const MAX_CELLS: u64 = 1 << 24;
+/// Target number of references per occupied cell when refining.
+pub const DENSE_CELL: f64 = 4.0;
 /// When the cell references exceed this many per primitive (plus a constant), the resolution
 /// is halved.
 pub const MAX_REFS_PER_PRIM: u64 = 32;
@@ -41,6 +50,9 @@ pub struct Grid {
     inv_width: [f32; 3],
     offsets: Vec<u32>,
     prims: Vec<u32>,
+    /// One bit per cell, set when the cell is not empty (small enough to stay in cache, so
+    /// that the walk through empty cells does not touch `offsets`).
+    occupied: Vec<u64>,
 }
 
 impl Grid {
@@ -54,6 +66,7 @@ impl Grid {
         let bounds = inflate(scene, 2.0 * m);
         let boxes: Vec<Bounds3> = prims.iter().map(|p| inflate(p.bounds, m)).collect();
         let mut res = resolution(&bounds, prims.len());
+        let mut refined = false;
         loop {
             let mut g = Self::empty(bounds, res);
             let refs: u64 = boxes
@@ -68,9 +81,28 @@ impl Grid {
             let cells: u64 = res.iter().map(|&r| r as u64).product();
             if refs > MAX_REFS_PER_PRIM * prims.len() as u64 + (1 << 20) && cells > 1 {
                 res = res.map(|r| (r / 2).max(1));
+                refined = true;
                 continue;
             }
-            g.fill(prims, &boxes, cells as usize, refs as usize);
+            let count = g.count(&boxes, cells as usize);
+            if !refined {
+                refined = true;
+                // Primitives on a surface crowd a thin shell of cells: refine once so that the
+                // occupied cells hold about DENSE_CELL references (the count there falls with
+                // the square of the resolution), within the cell budget.
+                let occupied = count.iter().filter(|&&c| c > 0).count().max(1);
+                let per_cell = refs as f64 / occupied as f64;
+                if per_cell > DENSE_CELL {
+                    let room = (MAX_CELLS as f64 / cells as f64).cbrt();
+                    let f = (per_cell / DENSE_CELL).sqrt().min(room);
+                    let finer = res.map(|r| ((r as f64 * f) as u32).clamp(1, MAX_RES));
+                    if finer != res && f > 1.1 {
+                        res = finer;
+                        continue;
+                    }
+                }
+            }
+            g.fill(prims, &boxes, count, refs as usize);
             return g;
         }
     }
@@ -85,14 +117,27 @@ impl Grid {
             inv_width: std::array::from_fn(|a| res[a] as f32 / d[a]),
             offsets: Vec::new(),
             prims: Vec::new(),
+            occupied: Vec::new(),
         }
     }
 
-    /// Fills the CSR lists: counts, prefix sums, then scatter.
-    fn fill(&mut self, prims: &[BuildPrim], boxes: &[Bounds3], cells: usize, refs: usize) {
+    /// The number of references of each cell, shifted by one (`count[c + 1]` for cell `c`).
+    fn count(&self, boxes: &[Bounds3], cells: usize) -> Vec<u32> {
         let mut count = vec![0u32; cells + 1];
         for b in boxes {
             self.for_each_cell(b, |c| count[c + 1] += 1);
+        }
+        count
+    }
+
+    /// Fills the CSR lists from the counts: prefix sums, then scatter.
+    fn fill(&mut self, prims: &[BuildPrim], boxes: &[Bounds3], mut count: Vec<u32>, refs: usize) {
+        let cells = count.len() - 1;
+        self.occupied = vec![0u64; cells.div_ceil(64)];
+        for c in 0..cells {
+            if count[c + 1] > 0 {
+                self.occupied[c / 64] |= 1 << (c % 64);
+            }
         }
         for c in 0..cells {
             count[c + 1] += count[c];
@@ -154,7 +199,7 @@ impl Grid {
 
     /// Memory used by the cell offsets and primitive lists, in bytes.
     pub fn memory(&self) -> usize {
-        (self.offsets.len() + self.prims.len()) * 4
+        (self.offsets.len() + self.prims.len()) * 4 + self.occupied.len() * 8
     }
 
     /// The primitives of cell `c` (linear index).
@@ -179,7 +224,8 @@ impl Grid {
         let mut visited = 0u64;
         loop {
             visited += 1;
-            if !v.cell(self.cell_prims(dda.linear)) {
+            let c = dda.linear;
+            if self.occupied[c / 64] >> (c % 64) & 1 == 1 && !v.cell(self.cell_prims(c)) {
                 break;
             }
             if !dda.advance(self, ray, inv, v.limit().min(end)) {
@@ -288,7 +334,7 @@ impl Dda {
 fn resolution(bounds: &Bounds3, n: usize) -> [u32; 3] {
     let d = bounds.diagonal();
     let d = [d.x, d.y, d.z];
-    let target = (CELLS_PER_PRIM * n as f32).min((MAX_RES as f32).powi(3));
+    let target = (CELLS_PER_PRIM * n as f32).min(MAX_CELLS as f32);
     let mut active = [true; 3];
     let mut side = 0.0f32;
     for _ in 0..3 {
@@ -343,7 +389,7 @@ mod tests {
             r[0] * r[1] >= 600 && r[0] * r[1] <= 1000 && r[0] > r[1],
             "{r:?}"
         );
-        assert_eq!(resolution(&cube, 100_000_000), [MAX_RES; 3]);
+        assert_eq!(resolution(&cube, 100_000_000), [256; 3]);
     }
 
     #[test]

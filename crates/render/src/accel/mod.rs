@@ -358,7 +358,13 @@ impl Accel {
     pub fn build(kind: AccelKind, geometry: &Geometry) -> Self {
         match kind {
             AccelKind::None => Accel::List(List::new(geometry)),
-            AccelKind::Bvh => Accel::Bvh(Bvh::build(build_prims(geometry))),
+            AccelKind::Bvh => {
+                // Grown boxes: a primitive may report a hit that round-off puts a hair outside
+                // its exact box, which the list would still find.
+                let m = margin(&geometry.bounds());
+                let prims = build_prims(geometry).into_iter().map(|p| BuildPrim { bounds: inflate(p.bounds, m), ..p }).collect();
+                Accel::Bvh(Bvh::build(prims))
+            }
             AccelKind::KdTree => Accel::KdTree(KdTree::build(&build_prims(geometry))),
             AccelKind::Grid => Accel::Grid(Grid::build(&build_prims(geometry))),
             AccelKind::Octree => Accel::Octree(Octree::build(&build_prims(geometry))),
