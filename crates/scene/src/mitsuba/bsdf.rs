@@ -9,7 +9,9 @@
 use super::xml::{Element, Props, Value};
 use super::{presets, Loader};
 use crate::error::{Pos, SceneError};
-use candela_render::material::{Distribution, Material, MaterialId, Microfacet, Model, RoughCoating};
+use candela_render::material::{
+    Distribution, Material, MaterialId, Microfacet, Model, RoughCoating,
+};
 use candela_render::texture::{Filter, Texture};
 use candela_render::{Image, Rgb};
 use std::sync::Arc;
@@ -41,16 +43,17 @@ impl<'t> Loader<'t> {
         id
     }
 
-    /// Mitsuba's BSDF for shapes without one: a one-sided diffuse of reflectance 0.5.
-    pub(super) fn default_material(&mut self) -> MaterialId {
-        if let Some(id) = self.default_material {
+    /// Mitsuba's BSDF for shapes without one: a one-sided diffuse of reflectance 0.5, or 0 on
+    /// emitters (which then only emit).
+    pub(super) fn default_material(&mut self, emitter: bool) -> MaterialId {
+        if let Some(id) = self.default_materials[emitter as usize] {
             return id;
         }
         let m = Material::one_sided(Model::Diffuse {
-            reflectance: Texture::Uniform(Rgb::splat(0.5)),
+            reflectance: Texture::Uniform(Rgb::splat(if emitter { 0.0 } else { 0.5 })),
         });
         let id = self.add_material(m, false);
-        self.default_material = Some(id);
+        self.default_materials[emitter as usize] = Some(id);
         id
     }
 
@@ -75,22 +78,22 @@ impl<'t> Loader<'t> {
                 return Ok((model, true, t));
             }
             "diffuse" => Model::Diffuse {
-                reflectance: self.tex(&p, "reflectance", 0.5, &mut textured)?,
+                reflectance: self.tex(&p, "reflectance", 0.5, false, &mut textured)?,
             },
             "conductor" | "roughconductor" => Model::Conductor {
                 eta_k: self.conductor_ior(&p)?,
-                reflectance: self.tex(&p, "specular_reflectance", 1.0, &mut textured)?,
+                reflectance: self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?,
                 mf: if kind == "roughconductor" { Some(self.microfacet(&p)?) } else { None },
             },
             "dielectric" | "roughdielectric" => Model::Dielectric {
                 eta: self.eta(&p, "bk7")?,
-                reflectance: self.tex(&p, "specular_reflectance", 1.0, &mut textured)?,
-                transmittance: self.tex(&p, "specular_transmittance", 1.0, &mut textured)?,
+                reflectance: self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?,
+                transmittance: self.tex(&p, "specular_transmittance", 1.0, false, &mut textured)?,
                 mf: if kind == "roughdielectric" { Some(self.microfacet(&p)?) } else { None },
             },
             "plastic" | "roughplastic" => {
-                let kd = self.tex(&p, "diffuse_reflectance", 0.5, &mut textured)?;
-                let ks = self.tex(&p, "specular_reflectance", 1.0, &mut textured)?;
+                let kd = self.tex(&p, "diffuse_reflectance", 0.5, false, &mut textured)?;
+                let ks = self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?;
                 let eta = self.eta(&p, "polypropylene")?;
                 let nonlinear = p.or("nonlinear", false)?;
                 if kind == "plastic" {
@@ -123,9 +126,15 @@ impl<'t> Loader<'t> {
         let range = (0.0, 1e4);
         let mut alpha = p.number_in("alpha", 0.1, range)?;
         if p.has("alpha_u") || p.has("alpha_v") {
-            let (u, v) = (p.number_in("alpha_u", 0.1, range)?, p.number_in("alpha_v", 0.1, range)?);
+            let (u, v) = (
+                p.number_in("alpha_u", 0.1, range)?,
+                p.number_in("alpha_v", 0.1, range)?,
+            );
             if u != v {
-                return Err(p.error(p.pos("alpha_u"), "anisotropic roughness (alpha_u ≠ alpha_v) is not supported"));
+                return Err(p.error(
+                    p.pos("alpha_u"),
+                    "anisotropic roughness (alpha_u ≠ alpha_v) is not supported",
+                ));
             }
             alpha = u;
         }
@@ -138,11 +147,26 @@ impl<'t> Loader<'t> {
         let ior = |name: &str, default: &str| -> Result<f32, SceneError> {
             let v = match p.item(name).map(|i| (&i.value, i.pos)) {
                 None => presets::ior(default).unwrap_or(1.0),
-                Some((Value::Str(s), pos)) => presets::ior(s)
-                    .ok_or_else(|| p.error(pos, format!("unknown index of refraction '{s}' (known: {})", presets::ior_names())))?,
+                Some((Value::Str(s), pos)) => presets::ior(s).ok_or_else(|| {
+                    p.error(
+                        pos,
+                        format!(
+                            "unknown index of refraction '{s}' (known: {})",
+                            presets::ior_names()
+                        ),
+                    )
+                })?,
                 Some((&Value::Float(v), _)) => v as f32,
                 Some((&Value::Int(v), _)) => v as f32,
-                Some((v, pos)) => return Err(p.error(pos, format!("'{name}' must be a number or a material name, not {}", v.describe()))),
+                Some((v, pos)) => {
+                    return Err(p.error(
+                        pos,
+                        format!(
+                            "'{name}' must be a number or a material name, not {}",
+                            v.describe()
+                        ),
+                    ))
+                }
             };
             if !(v > 0.0 && v.is_finite()) {
                 return Err(p.error(p.pos(name), format!("'{name}' must be positive, not {v}")));
@@ -157,9 +181,15 @@ impl<'t> Loader<'t> {
     fn conductor_ior(&self, p: &Props) -> Result<Option<(Rgb, Rgb)>, SceneError> {
         if p.has("eta") || p.has("k") {
             if p.has("material") {
-                return Err(p.error(p.pos("material"), "give either 'material' or 'eta' and 'k', not both"));
+                return Err(p.error(
+                    p.pos("material"),
+                    "give either 'material' or 'eta' and 'k', not both",
+                ));
             }
-            let (eta, k) = (self.color(p, "eta", 0.0)?, self.color(p, "k", 1.0)?);
+            let (eta, k) = (
+                self.color(p, "eta", 0.0, false)?,
+                self.color(p, "k", 1.0, false)?,
+            );
             // η = 0, k = 1 is Mitsuba's "none".
             return Ok((eta != Rgb::BLACK || k != Rgb::WHITE).then_some((eta, k)));
         }
@@ -168,24 +198,44 @@ impl<'t> Loader<'t> {
             return Ok(None);
         }
         let (eta, k) = presets::conductor(&name).ok_or_else(|| {
-            p.error(p.pos("material"), format!("unknown conductor material '{name}' (known: none, {})", presets::conductor_names()))
+            p.error(
+                p.pos("material"),
+                format!(
+                    "unknown conductor material '{name}' (known: none, {})",
+                    presets::conductor_names()
+                ),
+            )
         })?;
         let rgb = |c: [f32; 3]| Rgb::new(c[0], c[1], c[2]);
         Ok(Some((rgb(eta), rgb(k))))
     }
 
-    /// A property that may vary over a surface: a colour, a number, or a `<texture>`.
-    pub(super) fn tex(&mut self, p: &Props<'t>, name: &str, default: f32, textured: &mut bool) -> Result<Texture, SceneError> {
+    /// A property that may vary over a surface: a colour, a number, or a `<texture>`
+    /// (`emitted`: see [`Loader::color`]).
+    pub(super) fn tex(
+        &mut self,
+        p: &Props<'t>,
+        name: &str,
+        default: f32,
+        emitted: bool,
+        textured: &mut bool,
+    ) -> Result<Texture, SceneError> {
         let nested = match p.item(name).map(|i| (&i.value, i.pos)) {
             Some((&Value::Object(e), pos)) if e.tag == "texture" => Some((e, pos)),
             Some((Value::Object(e), pos)) => {
-                return Err(p.error(pos, format!("'{name}' must be a colour or a <texture>, not {}", e.describe())))
+                return Err(p.error(
+                    pos,
+                    format!(
+                        "'{name}' must be a colour or a <texture>, not {}",
+                        e.describe()
+                    ),
+                ))
             }
             _ => None,
         };
         let t = match nested {
             Some((e, _)) => self.texture_plugin(e)?,
-            None => Texture::Uniform(self.color(p, name, default)?),
+            None => Texture::Uniform(self.color(p, name, default, emitted)?),
         };
         *textured |= varies(&t);
         Ok(t)
@@ -201,7 +251,9 @@ impl<'t> Loader<'t> {
         let scale = self.uv_scale(&p)?;
         let t = match e.kind() {
             "bitmap" => {
-                let (name, pos) = p.get::<String>("filename")?.ok_or_else(|| p.error(e.pos, "bitmap needs a 'filename'"))?;
+                let (name, pos) = p
+                    .get::<String>("filename")?
+                    .ok_or_else(|| p.error(e.pos, "bitmap needs a 'filename'"))?;
                 let raw = p.or("raw", false)?;
                 let filter = match p.choice("filter_type", &["bilinear", "nearest"])?.as_str() {
                     "nearest" => Filter::Nearest,
@@ -219,16 +271,32 @@ impl<'t> Loader<'t> {
                 }
             }
             "checkerboard" => {
-                let (c1, c2) = (self.color(&p, "color0", 0.4)?, self.color(&p, "color1", 0.2)?);
+                let (c1, c2) = (
+                    self.color(&p, "color0", 0.4, false)?,
+                    self.color(&p, "color1", 0.2, false)?,
+                );
                 // Mitsuba: color0 where frac(u) and frac(v) are on the same side of ½, i.e.
                 // candela's checkerboard of 2 squares per unit of (scaled) uv.
                 let steps = 2.0 * scale[0];
-                if scale[0] != scale[1] || steps.fract() != 0.0 || !(1.0..=65536.0).contains(&steps) {
-                    return Err(p.error(p.pos("to_uv"), "checkerboard: to_uv must scale u and v by the same multiple of ½"));
+                if scale[0] != scale[1] || steps.fract() != 0.0 || !(1.0..=65536.0).contains(&steps)
+                {
+                    return Err(p.error(
+                        p.pos("to_uv"),
+                        "checkerboard: to_uv must scale u and v by the same multiple of ½",
+                    ));
                 }
-                Texture::Checkered { c1, c2, steps: steps as u32 }
+                Texture::Checkered {
+                    c1,
+                    c2,
+                    steps: steps as u32,
+                }
             }
-            other => return Err(p.error(e.pos, format!("unsupported texture '{other}' (supported: bitmap, checkerboard)"))),
+            other => {
+                return Err(p.error(
+                    e.pos,
+                    format!("unsupported texture '{other}' (supported: bitmap, checkerboard)"),
+                ))
+            }
         };
         self.finish(&p);
         self.leave();
@@ -243,23 +311,34 @@ impl<'t> Loader<'t> {
         };
         let off_diagonal = (0..3).any(|r| (0..4).any(|c| r != c && m.0[r][c] != 0.0));
         if off_diagonal || !(m.0[0][0] > 0.0 && m.0[1][1] > 0.0) {
-            return Err(p.error(pos, "to_uv: only positive scalings of u and v are supported"));
+            return Err(p.error(
+                pos,
+                "to_uv: only positive scalings of u and v are supported",
+            ));
         }
         Ok([m.0[0][0] as f32, m.0[1][1] as f32])
     }
 
     /// The image `name` (resolved against the scene's folder), linear RGB. PNGs are sRGB-decoded
     /// unless `raw` (Mitsuba's `raw="true"` keeps the stored values).
-    pub(super) fn image(&mut self, name: &str, raw: bool, pos: Pos) -> Result<Arc<Image>, SceneError> {
+    pub(super) fn image(
+        &mut self,
+        name: &str,
+        raw: bool,
+        pos: Pos,
+    ) -> Result<Arc<Image>, SceneError> {
         let path = self.resolve(name);
         if let Some(i) = self.images.get(&(path.clone(), raw)) {
             return Ok(i.clone());
         }
-        let mut img = candela_imageio::read_image(&path).map_err(|e| self.err(pos, format!("cannot load image '{name}': {e}")))?;
+        let mut img = candela_imageio::read_image(&path)
+            .map_err(|e| self.err(pos, format!("cannot load image '{name}': {e}")))?;
         if img.width() == 0 || img.height() == 0 {
             return Err(self.err(pos, format!("image '{name}' is empty")));
         }
-        let is_png = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        let is_png = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
         if raw && is_png {
             for px in img.pixels_mut() {
                 *px = px.map(candela_imageio::tonemap::srgb_oetf);

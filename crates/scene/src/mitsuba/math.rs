@@ -14,7 +14,11 @@ fn sub(a: V3, b: V3) -> V3 {
 }
 
 fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 fn normalize(a: V3) -> Option<V3> {
@@ -24,11 +28,21 @@ fn normalize(a: V3) -> Option<V3> {
 
 impl M4 {
     /// The identity.
-    pub const IDENTITY: M4 = M4([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]);
+    pub const IDENTITY: M4 = M4([
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ]);
 
     /// The matrix whose columns are `x`, `y`, `z` and the translation `t`.
     pub fn from_columns(x: V3, y: V3, z: V3, t: V3) -> M4 {
-        M4([[x[0], y[0], z[0], t[0]], [x[1], y[1], z[1], t[1]], [x[2], y[2], z[2], t[2]], [0.0, 0.0, 0.0, 1.0]])
+        M4([
+            [x[0], y[0], z[0], t[0]],
+            [x[1], y[1], z[1], t[1]],
+            [x[2], y[2], z[2], t[2]],
+            [0.0, 0.0, 0.0, 1.0],
+        ])
     }
 
     /// Translation by `v`.
@@ -38,18 +52,40 @@ impl M4 {
 
     /// Scaling by the factors of `v`.
     pub fn scale(v: V3) -> M4 {
-        Self::from_columns([v[0], 0.0, 0.0], [0.0, v[1], 0.0], [0.0, 0.0, v[2]], [0.0; 3])
+        Self::from_columns(
+            [v[0], 0.0, 0.0],
+            [0.0, v[1], 0.0],
+            [0.0, 0.0, v[2]],
+            [0.0; 3],
+        )
     }
 
-    /// Right-handed rotation by `degrees` about `axis`; `None` for a zero axis.
-    pub fn rotate(axis: V3, degrees: f64) -> Option<M4> {
-        let a = normalize(axis)?;
+    /// Mitsuba 3's rotation by `degrees` about `axis`: c·I + (1 − c)·a·aᵀ + s·[a]×, a right-handed
+    /// rotation for a unit axis. Like Mitsuba 3, the axis is *not* normalised (a longer axis
+    /// also scales and shears). `None` for a zero axis.
+    pub fn rotate(a: V3, degrees: f64) -> Option<M4> {
+        normalize(a)?;
         let (s, c) = degrees.to_radians().sin_cos();
         let t = 1.0 - c;
         Some(M4([
-            [t * a[0] * a[0] + c, t * a[0] * a[1] - s * a[2], t * a[0] * a[2] + s * a[1], 0.0],
-            [t * a[0] * a[1] + s * a[2], t * a[1] * a[1] + c, t * a[1] * a[2] - s * a[0], 0.0],
-            [t * a[0] * a[2] - s * a[1], t * a[1] * a[2] + s * a[0], t * a[2] * a[2] + c, 0.0],
+            [
+                t * a[0] * a[0] + c,
+                t * a[0] * a[1] - s * a[2],
+                t * a[0] * a[2] + s * a[1],
+                0.0,
+            ],
+            [
+                t * a[0] * a[1] + s * a[2],
+                t * a[1] * a[1] + c,
+                t * a[1] * a[2] - s * a[0],
+                0.0,
+            ],
+            [
+                t * a[0] * a[2] - s * a[1],
+                t * a[1] * a[2] + s * a[0],
+                t * a[2] * a[2] + c,
+                0.0,
+            ],
             [0.0, 0.0, 0.0, 1.0],
         ]))
     }
@@ -113,7 +149,8 @@ impl M4 {
     /// The determinant of the linear part.
     pub fn det3(&self) -> f64 {
         let m = &self.0;
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
             + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
     }
 
@@ -147,13 +184,62 @@ impl M4 {
         Some(M4(inv))
     }
 
+    /// The transpose.
+    pub fn transpose(&self) -> M4 {
+        let mut r = [[0.0; 4]; 4];
+        for (i, row) in r.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x = self.0[j][i];
+            }
+        }
+        M4(r)
+    }
+
+    /// The linear part (the translation removed).
+    pub fn linear(&self) -> M4 {
+        let mut m = *self;
+        for r in 0..3 {
+            m.0[r][3] = 0.0;
+        }
+        m
+    }
+
+    /// The polar decomposition of the linear part, L = Q·S (Q orthogonal, S symmetric), by the
+    /// scaled Newton iteration Mitsuba uses for spheres; `None` when singular.
+    pub fn polar(&self) -> Option<(M4, M4)> {
+        let frob = |m: &M4| {
+            m.0.iter()
+                .take(3)
+                .flat_map(|r| &r[..3])
+                .map(|x| x * x)
+                .sum::<f64>()
+                .sqrt()
+        };
+        let l = self.linear();
+        let mut q = l;
+        for _ in 0..25 {
+            let qi = q.inverse()?.transpose();
+            let g = (frob(&qi) / frob(&q)).sqrt();
+            for r in 0..3 {
+                for c in 0..3 {
+                    q.0[r][c] = 0.5 * (g * q.0[r][c] + qi.0[r][c] / g);
+                }
+            }
+        }
+        Some((q, q.transpose().mul(&l)))
+    }
+
     /// The single-precision transformation; `None` when singular, not affine or not finite.
-    pub fn to_transform(&self) -> Option<Transform> {
+    pub fn to_transform(self) -> Option<Transform> {
         let affine = self.0[3] == [0.0, 0.0, 0.0, 1.0];
         let inv = self.inverse()?;
         let f = |m: &M4| Matrix4::new(m.0.map(|r| r.map(|x| x as f32)));
-        let (m, i) = (f(self), f(&inv));
-        let finite = m.m.iter().chain(i.m.iter()).flatten().all(|x| x.is_finite());
+        let (m, i) = (f(&self), f(&inv));
+        let finite =
+            m.m.iter()
+                .chain(i.m.iter())
+                .flatten()
+                .all(|x| x.is_finite());
         (affine && finite && self.det3().abs() > 0.0).then(|| Transform::from_pair(m, i))
     }
 }
@@ -163,17 +249,46 @@ mod tests {
     use super::*;
 
     fn close(a: &M4, b: &M4) -> bool {
-        a.0.iter().flatten().zip(b.0.iter().flatten()).all(|(x, y)| (x - y).abs() < 1e-12)
+        a.0.iter()
+            .flatten()
+            .zip(b.0.iter().flatten())
+            .all(|(x, y)| (x - y).abs() < 1e-12)
     }
 
     #[test]
     fn inverse_and_composition() {
-        let m = M4::translate([1.0, 2.0, 3.0]).mul(&M4::rotate([1.0, 1.0, 0.0], 30.0).unwrap()).mul(&M4::scale([2.0, 3.0, 4.0]));
+        let m = M4::translate([1.0, 2.0, 3.0])
+            .mul(&M4::rotate([1.0, 1.0, 0.0], 30.0).unwrap())
+            .mul(&M4::scale([2.0, 3.0, 4.0]));
         assert!(close(&m.mul(&m.inverse().unwrap()), &M4::IDENTITY));
         assert!(M4::scale([1.0, 0.0, 1.0]).inverse().is_none());
         // A rotation by 90° about z maps x to y.
-        let r = M4::rotate([0.0, 0.0, 2.0], 90.0).unwrap().vector([1.0, 0.0, 0.0]);
+        let r = M4::rotate([0.0, 0.0, 1.0], 90.0)
+            .unwrap()
+            .vector([1.0, 0.0, 0.0]);
         assert!((r[0]).abs() < 1e-12 && (r[1] - 1.0).abs() < 1e-12);
+        // Mitsuba 3 does not normalise the axis: (1, 1, 0) by 40° moves (1, -1, -1) to
+        // (0.1232568, -0.1232568, -2.0516198), as its cube plugin reports.
+        let r = M4::rotate([1.0, 1.0, 0.0], 40.0)
+            .unwrap()
+            .point([1.0, -1.0, -1.0]);
+        assert!(
+            (r[0] - 0.1232568).abs() < 1e-6
+                && (r[1] + 0.1232568).abs() < 1e-6
+                && (r[2] + 2.0516198).abs() < 1e-6,
+            "{r:?}"
+        );
+    }
+
+    #[test]
+    fn polar_decomposition() {
+        let r = M4::rotate([0.0, 1.0, 0.0], 30.0).unwrap();
+        let m = M4::translate([1.0, 2.0, 3.0])
+            .mul(&r)
+            .mul(&M4::scale([2.0, 2.0, 2.0]));
+        let (q, s) = m.polar().unwrap();
+        assert!(close(&q, &r), "{q:?}");
+        assert!((s.0[0][0] - 2.0).abs() < 1e-12 && s.0[0][1].abs() < 1e-12);
     }
 
     #[test]

@@ -26,30 +26,52 @@ impl<'t> Loader<'t> {
     /// A `<shape>`.
     pub(super) fn shape(&mut self, e: &'t Element) -> Result<(), SceneError> {
         let p = self.props(e)?;
+        let emitter = p.object("emitter")?;
         let material = match p.object("bsdf")? {
             Some((b, _)) => self.material(b)?,
-            None => self.default_material(),
+            None => self.default_material(emitter.is_some()),
         };
-        let mut textured = self.textured.get(material as usize).copied().unwrap_or(false);
-        let emission = match p.object("emitter")? {
+        let mut textured = self
+            .textured
+            .get(material as usize)
+            .copied()
+            .unwrap_or(false);
+        let emission = match emitter {
             Some((em, pos)) if em.kind() != "area" => {
-                return Err(p.error(pos, format!("only area emitters can be attached to shapes, not '{}'", em.kind())))
+                return Err(p.error(
+                    pos,
+                    format!(
+                        "only area emitters can be attached to shapes, not '{}'",
+                        em.kind()
+                    ),
+                ))
             }
             Some((em, _)) => {
                 let ep = self.props(em)?;
                 ep.ignore(&["sampling_weight"]);
-                let radiance = self.tex(&ep, "radiance", 1.0, &mut textured)?;
+                let radiance = self.tex(&ep, "radiance", 1.0, true, &mut textured)?;
                 self.finish(&ep);
-                Some(self.scene.add_emission(Emission { radiance, two_sided: false }))
+                Some(self.scene.add_emission(Emission {
+                    radiance,
+                    two_sided: false,
+                }))
             }
             None => None,
         };
         if let Some((m, pos)) = p.objects("medium").first() {
-            return Err(p.error(*pos, format!("participating media ({}) are not supported", m.describe())));
+            return Err(p.error(
+                *pos,
+                format!("participating media ({}) are not supported", m.describe()),
+            ));
         }
         let (m, t) = self.to_world(&p)?;
         let flip = p.or("flip_normals", false)?;
-        let singular = |b: &Self| b.err(p.pos("to_world"), "the shape is degenerate (a scaling by zero?)");
+        let singular = |b: &Self| {
+            b.err(
+                p.pos("to_world"),
+                "the shape is degenerate (a scaling by zero?)",
+            )
+        };
         let shape = match e.kind() {
             "sphere" => {
                 if flip {
@@ -60,8 +82,22 @@ impl<'t> Loader<'t> {
                 if !(r > 0.0) {
                     return Err(p.error(p.pos("radius"), format!("the radius must be positive, not {r}")));
                 }
-                let local = M4::translate(c).mul(&M4::scale([r; 3]));
-                Built::Shape(Shape::Sphere(Sphere::new(m.mul(&local).to_transform().ok_or_else(|| singular(self))?)))
+                // Mitsuba keeps a sphere round: it decomposes to_world·translate(c)·scale(r)
+                // into rotation Q and stretch S and uses S's first entry as the radius.
+                let full = m.mul(&M4::translate(c)).mul(&M4::scale([r; 3]));
+                let (q, st) = full.polar().ok_or_else(|| singular(self))?;
+                let s = st.0;
+                let round = (s[0][0] - s[1][1]).abs() < 1e-6 * s[0][0].abs() && (s[0][0] - s[2][2]).abs() < 1e-6 * s[0][0].abs();
+                let sheared = [s[0][1], s[0][2], s[1][2]].iter().any(|x| x.abs() > 1e-6 * s[0][0].abs());
+                if !round || sheared {
+                    self.warn(p.pos("to_world"), "a sphere's to_world should not scale non-uniformly or shear: like Mitsuba, the sphere stays round");
+                }
+                if !(s[0][0] > 0.0) || q.det3() < 0.0 {
+                    return Err(p.error(p.pos("to_world"), "a mirroring to_world on a sphere is not supported"));
+                }
+                let centre = full.point([0.0; 3]);
+                let t = M4::translate(centre).mul(&q).mul(&M4::scale([s[0][0]; 3]));
+                Built::Shape(Shape::Sphere(Sphere::new(t.to_transform().ok_or_else(|| singular(self))?)))
             }
             "rectangle" => {
                 // v × w follows Mitsuba's normal T^-T·z unless the transform mirrors; a flip
@@ -168,8 +204,14 @@ fn flip_mesh(m: &mut Mesh) {
 fn rectangle_mesh(t: &Transform, flip: bool) -> Mesh {
     let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
     let mut m = Mesh {
-        positions: corners.iter().map(|&(x, y)| Point3::new(x, y, 0.0)).collect(),
-        uvs: corners.iter().map(|&(x, y)| Point2::new((x + 1.0) / 2.0, (y + 1.0) / 2.0)).collect(),
+        positions: corners
+            .iter()
+            .map(|&(x, y)| Point3::new(x, y, 0.0))
+            .collect(),
+        uvs: corners
+            .iter()
+            .map(|&(x, y)| Point2::new((x + 1.0) / 2.0, (y + 1.0) / 2.0))
+            .collect(),
         indices: vec![[0, 1, 2], [0, 2, 3]],
         ..Mesh::default()
     }
@@ -195,12 +237,16 @@ fn cube_mesh(t: &Transform, flip: bool) -> Mesh {
     let mut m = Mesh::default();
     for (f, corners) in FACES.iter().enumerate() {
         let base = (f * 4) as u32;
-        let p: Vec<Point3> = corners.iter().map(|c| Point3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
+        let p: Vec<Point3> = corners
+            .iter()
+            .map(|c| Point3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+            .collect();
         let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize().to_normal();
         m.positions.extend(&p);
         m.normals.extend([n; 4]);
         m.uvs.extend(UV.iter().map(|&(u, v)| Point2::new(u, v)));
-        m.indices.extend([[base, base + 1, base + 2], [base + 3, base, base + 2]]);
+        m.indices
+            .extend([[base, base + 1, base + 2], [base + 3, base, base + 2]]);
     }
     let mut m = m.transformed(t);
     if flip {
@@ -222,7 +268,10 @@ fn vertex_normals(m: &Mesh) -> Vec<Normal3> {
         }
         let n = n / len;
         for k in 0..3 {
-            let (a, b) = ((p[(k + 1) % 3] - p[k]).normalize(), (p[(k + 2) % 3] - p[k]).normalize());
+            let (a, b) = (
+                (p[(k + 1) % 3] - p[k]).normalize(),
+                (p[(k + 2) % 3] - p[k]).normalize(),
+            );
             let angle = a.dot(b).clamp(-1.0, 1.0).acos();
             if angle.is_finite() {
                 acc[tri[k] as usize] += n * angle;
@@ -263,13 +312,22 @@ mod tests {
     #[test]
     fn smooth_normals_of_a_tetrahedron_corner() {
         let m = Mesh {
-            positions: vec![Point3::ORIGIN, Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0), Point3::new(0.0, 0.0, 1.0)],
+            positions: vec![
+                Point3::ORIGIN,
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(0.0, 1.0, 0.0),
+                Point3::new(0.0, 0.0, 1.0),
+            ],
             indices: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2]],
             ..Mesh::default()
         };
         let n = vertex_normals(&m);
         // Three faces meet at the origin at right angles: their mean is -(1,1,1)/√3.
         let s = 1.0 / 3f32.sqrt();
-        assert!(n[0].to_vec().approx_eq(Vec3::new(-s, -s, -s), 1e-5), "{:?}", n[0]);
+        assert!(
+            n[0].to_vec().approx_eq(Vec3::new(-s, -s, -s), 1e-5),
+            "{:?}",
+            n[0]
+        );
     }
 }

@@ -72,7 +72,9 @@ struct LineIndex<'a> {
 
 impl<'a> LineIndex<'a> {
     fn new(text: &'a str) -> Self {
-        let starts = std::iter::once(0).chain(text.match_indices('\n').map(|(i, _)| i + 1)).collect();
+        let starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
         Self { text, starts }
     }
 
@@ -80,7 +82,10 @@ impl<'a> LineIndex<'a> {
         let byte = byte.min(self.text.len());
         let line = self.starts.partition_point(|&s| s <= byte).max(1);
         let start = self.starts[line - 1];
-        let col = self.text.get(start..byte).map_or(1, |s| s.chars().count() + 1);
+        let col = self
+            .text
+            .get(start..byte)
+            .map_or(1, |s| s.chars().count() + 1);
         Pos::new(line as u32, col as u32)
     }
 }
@@ -95,7 +100,10 @@ struct Param {
 
 /// Parses `src` into a tree of elements, substituting parameters in document order.
 /// Returns the root element and the command-line parameters the scene never used.
-pub(super) fn parse(src: &SourceFile, defines: &[(String, String)]) -> Result<(Element, Vec<String>), SceneError> {
+pub(super) fn parse(
+    src: &SourceFile,
+    defines: &[(String, String)],
+) -> Result<(Element, Vec<String>), SceneError> {
     let text: &str = &src.text;
     let opts = roxmltree::ParsingOptions {
         allow_dtd: false,
@@ -163,7 +171,9 @@ impl Parser<'_> {
         };
         if e.tag == "default" {
             let (Some(name), Some(value)) = (e.get("name"), e.get("value")) else {
-                return Err(self.src.error(pos, "<default> needs the attributes 'name' and 'value'"));
+                return Err(self
+                    .src
+                    .error(pos, "<default> needs the attributes 'name' and 'value'"));
             };
             if name.is_empty() {
                 return Err(self.src.error(pos, "<default>: the name is empty"));
@@ -214,7 +224,10 @@ impl Parser<'_> {
                         continue;
                     }
                     None => {
-                        let name: String = after.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+                        let name: String = after
+                            .chars()
+                            .take_while(|c| c.is_alphanumeric() || *c == '_')
+                            .collect();
                         let at = if raw { start + offset + i } else { start };
                         return Err(self.src.error(
                             self.lines.pos(at),
@@ -242,8 +255,10 @@ pub(super) enum Value<'t> {
     Bool(bool),
     /// `<string>`.
     Str(&'t str),
-    /// `<rgb>`, or a `<spectrum>` with one value.
+    /// `<rgb>`.
     Rgb([f64; 3]),
+    /// A `<spectrum>` with one value: a flat spectrum.
+    Spectrum(f64),
     /// `<point>` or `<vector>`.
     Vector([f64; 3]),
     /// `<transform>`.
@@ -260,7 +275,7 @@ impl Value<'_> {
             Value::Int(_) => "an integer".into(),
             Value::Bool(_) => "a boolean".into(),
             Value::Str(_) => "a string".into(),
-            Value::Rgb(_) => "a colour".into(),
+            Value::Rgb(_) | Value::Spectrum(_) => "a colour".into(),
             Value::Vector(_) => "a point or vector".into(),
             Value::Transform(_) => "a transform".into(),
             Value::Object(e) => e.describe(),
@@ -290,7 +305,9 @@ impl FromValue for f64 {
 impl FromValue for f32 {
     const WHAT: &'static str = "a number";
     fn from_value(v: &Value) -> Option<Self> {
-        f64::from_value(v).map(|x| x as f32).filter(|x| x.is_finite())
+        f64::from_value(v)
+            .map(|x| x as f32)
+            .filter(|x| x.is_finite())
     }
 }
 
@@ -361,85 +378,135 @@ pub(super) struct Props<'t> {
     /// The plugin element.
     pub owner: &'t Element,
     items: Vec<Item<'t>>,
+    /// Remarks found while parsing (reported with the unused parameters).
+    notes: Vec<(Pos, String)>,
     src: SourceFile,
 }
 
 impl<'t> Props<'t> {
     /// Parses the properties of `owner`. `ids` resolves `<ref>`s; `upgrade` converts the
     /// camelCase names of Mitsuba 0.6 files.
-    pub fn new(owner: &'t Element, ids: &HashMap<String, &'t Element>, src: &SourceFile, upgrade: bool) -> Result<Self, SceneError> {
+    pub fn new(
+        owner: &'t Element,
+        ids: &HashMap<String, &'t Element>,
+        src: &SourceFile,
+        upgrade: bool,
+    ) -> Result<Self, SceneError> {
         let mut items: Vec<Item<'t>> = Vec::new();
+        let mut notes = Vec::new();
         for c in &owner.children {
             let err = |msg: String| src.error(c.pos, msg);
-            let name = c.get("name").map(|n| if upgrade { camel_to_underscore(n) } else { n.to_string() });
-            let need = |attr: &str| c.attr(attr).ok_or_else(|| err(format!("<{}> needs the attribute '{attr}'", c.tag)));
-            let value = match c.tag.as_str() {
-                "float" => Value::Float(number(src, need("value")?)?),
-                "integer" => {
-                    let a = need("value")?;
-                    Value::Int(a.value.trim().parse::<i64>().map_err(|e| {
-                        let why = match e.kind() {
-                            std::num::IntErrorKind::PosOverflow | std::num::IntErrorKind::NegOverflow => "is out of range",
-                            _ => "is not an integer",
-                        };
-                        src.error(a.pos, format!("'{}' {why}", a.value))
-                    })?)
+            let name = c.get("name").map(|n| {
+                if upgrade {
+                    camel_to_underscore(n)
+                } else {
+                    n.to_string()
                 }
-                "boolean" => {
-                    let a = need("value")?;
-                    match a.value.trim().to_ascii_lowercase().as_str() {
-                        "true" => Value::Bool(true),
-                        "false" => Value::Bool(false),
-                        _ => return Err(src.error(a.pos, format!("'{}' is not a boolean (true or false)", a.value))),
-                    }
-                }
-                "string" => Value::Str(&need("value")?.value),
-                "rgb" => {
-                    let a = need("value")?;
-                    match numbers(src, a)?.as_slice() {
-                        [v] => Value::Rgb([*v; 3]),
-                        [r, g, b] => Value::Rgb([*r, *g, *b]),
-                        v => return Err(src.error(a.pos, format!("<rgb> needs one or three values, not {}", v.len()))),
-                    }
-                }
-                "spectrum" => {
-                    if c.attr("type").is_some() {
-                        return Err(err(format!("spectrum plugins ({}) are not supported: use <rgb>", c.describe())));
-                    }
-                    if let Some(f) = c.attr("filename") {
-                        return Err(src.error(f.pos, "spectra from files are not supported: use <rgb>"));
-                    }
-                    let a = need("value")?;
-                    if a.value.contains(':') {
-                        return Err(src.error(a.pos, "spectra given as wavelength:value pairs are not supported: use <rgb>"));
-                    }
-                    match numbers(src, a)?.as_slice() {
-                        [v] => Value::Rgb([*v; 3]),
-                        _ => return Err(src.error(a.pos, "a <spectrum> needs a single value here (use <rgb> for colours)")),
-                    }
-                }
-                "point" | "vector" => Value::Vector(vector(src, c, 0.0, true)?),
-                "transform" => Value::Transform(transform(src, c)?),
-                "ref" => {
-                    let a = need("id")?;
-                    let target = ids
-                        .get(a.value.as_str())
-                        .ok_or_else(|| src.error(a.pos, format!("unknown id '{}'", a.value)))?;
-                    Value::Object(target)
-                }
-                "bsdf" | "texture" | "emitter" | "shape" | "sensor" | "film" | "sampler" | "rfilter" | "integrator" | "medium"
-                | "phase" | "volume" => Value::Object(c),
-                "default" | "alias" | "path" => continue,
-                "translate" | "rotate" | "scale" | "matrix" | "lookat" => {
-                    return Err(err(format!("<{}> can only appear inside a <transform>", c.tag)))
-                }
-                "include" => return Err(err("<include> is not supported: paste the included file instead".into())),
-                t => return Err(err(format!("unknown element <{t}>"))),
+            });
+            let need = |attr: &str| {
+                c.attr(attr)
+                    .ok_or_else(|| err(format!("<{}> needs the attribute '{attr}'", c.tag)))
             };
+            let value =
+                match c.tag.as_str() {
+                    "float" => Value::Float(number(src, need("value")?)?),
+                    "integer" => {
+                        let a = need("value")?;
+                        Value::Int(a.value.trim().parse::<i64>().map_err(|e| {
+                            let why = match e.kind() {
+                                std::num::IntErrorKind::PosOverflow
+                                | std::num::IntErrorKind::NegOverflow => "is out of range",
+                                _ => "is not an integer",
+                            };
+                            src.error(a.pos, format!("'{}' {why}", a.value))
+                        })?)
+                    }
+                    "boolean" => {
+                        let a = need("value")?;
+                        match a.value.trim().to_ascii_lowercase().as_str() {
+                            "true" => Value::Bool(true),
+                            "false" => Value::Bool(false),
+                            _ => {
+                                return Err(src.error(
+                                    a.pos,
+                                    format!("'{}' is not a boolean (true or false)", a.value),
+                                ))
+                            }
+                        }
+                    }
+                    "string" => Value::Str(&need("value")?.value),
+                    "rgb" => {
+                        let a = need("value")?;
+                        match numbers(src, a)?.as_slice() {
+                            [v] => Value::Rgb([*v; 3]),
+                            [r, g, b] => Value::Rgb([*r, *g, *b]),
+                            v => {
+                                return Err(src.error(
+                                    a.pos,
+                                    format!("<rgb> needs one or three values, not {}", v.len()),
+                                ))
+                            }
+                        }
+                    }
+                    "spectrum" => {
+                        if c.attr("type").is_some() {
+                            return Err(err(format!(
+                                "spectrum plugins ({}) are not supported: use <rgb>",
+                                c.describe()
+                            )));
+                        }
+                        if let Some(f) = c.attr("filename") {
+                            return Err(
+                                src.error(f.pos, "spectra from files are not supported: use <rgb>")
+                            );
+                        }
+                        let a = need("value")?;
+                        if a.value.contains(':') {
+                            return Err(src.error(
+                            a.pos,
+                            "spectra given as wavelength:value pairs are not supported: use <rgb>",
+                        ));
+                        }
+                        match numbers(src, a)?.as_slice() {
+                            [v] => Value::Spectrum(*v),
+                            _ => return Err(src.error(
+                                a.pos,
+                                "a <spectrum> needs a single value here (use <rgb> for colours)",
+                            )),
+                        }
+                    }
+                    "point" | "vector" => Value::Vector(vector(src, c, 0.0, true)?),
+                    "transform" => Value::Transform(transform(src, c, &mut notes)?),
+                    "ref" => {
+                        let a = need("id")?;
+                        let target = ids
+                            .get(a.value.as_str())
+                            .ok_or_else(|| src.error(a.pos, format!("unknown id '{}'", a.value)))?;
+                        Value::Object(target)
+                    }
+                    "bsdf" | "texture" | "emitter" | "shape" | "sensor" | "film" | "sampler"
+                    | "rfilter" | "integrator" | "medium" | "phase" | "volume" => Value::Object(c),
+                    "default" | "alias" | "path" => continue,
+                    "translate" | "rotate" | "scale" | "matrix" | "lookat" => {
+                        return Err(err(format!(
+                            "<{}> can only appear inside a <transform>",
+                            c.tag
+                        )))
+                    }
+                    "include" => {
+                        return Err(err(
+                            "<include> is not supported: paste the included file instead".into(),
+                        ))
+                    }
+                    t => return Err(err(format!("unknown element <{t}>"))),
+                };
             if !matches!(value, Value::Object(_)) {
                 match c.children.first() {
                     Some(g) if !matches!(value, Value::Transform(_)) => {
-                        return Err(src.error(g.pos, format!("<{}> cannot appear inside the property <{}>", g.tag, c.tag)))
+                        return Err(src.error(
+                            g.pos,
+                            format!("<{}> cannot appear inside the property <{}>", g.tag, c.tag),
+                        ))
                     }
                     _ => {}
                 }
@@ -469,6 +536,7 @@ impl<'t> Props<'t> {
         Ok(Self {
             owner,
             items,
+            notes,
             src: src.clone(),
         })
     }
@@ -480,7 +548,10 @@ impl<'t> Props<'t> {
 
     /// The property `name` (marked as read).
     pub fn item(&self, name: &str) -> Option<&Item<'t>> {
-        let i = self.items.iter().find(|i| i.name.as_deref() == Some(name))?;
+        let i = self
+            .items
+            .iter()
+            .find(|i| i.name.as_deref() == Some(name))?;
         i.used.set(true);
         Some(i)
     }
@@ -501,10 +572,15 @@ impl<'t> Props<'t> {
     /// The property `name` as a `T` with its position, `None` when absent, an error when it has
     /// another type.
     pub fn get<T: FromValue>(&self, name: &str) -> Result<Option<(T, Pos)>, SceneError> {
-        let Some(i) = self.item(name) else { return Ok(None) };
+        let Some(i) = self.item(name) else {
+            return Ok(None);
+        };
         match T::from_value(&i.value) {
             Some(v) => Ok(Some((v, i.pos))),
-            None => Err(self.error(i.pos, format!("'{name}' must be {}, not {}", T::WHAT, i.value.describe()))),
+            None => Err(self.error(
+                i.pos,
+                format!("'{name}' must be {}, not {}", T::WHAT, i.value.describe()),
+            )),
         }
     }
 
@@ -514,10 +590,21 @@ impl<'t> Props<'t> {
     }
 
     /// A number that must lie in `range` (inclusive), or `default`.
-    pub fn number_in(&self, name: &str, default: f64, range: (f64, f64)) -> Result<f64, SceneError> {
+    pub fn number_in(
+        &self,
+        name: &str,
+        default: f64,
+        range: (f64, f64),
+    ) -> Result<f64, SceneError> {
         let v = self.or(name, default)?;
         if !(v >= range.0 && v <= range.1) {
-            return Err(self.error(self.pos(name), format!("'{name}' must be between {} and {}, not {v}", range.0, range.1)));
+            return Err(self.error(
+                self.pos(name),
+                format!(
+                    "'{name}' must be between {} and {}, not {v}",
+                    range.0, range.1
+                ),
+            ));
         }
         Ok(v)
     }
@@ -526,7 +613,13 @@ impl<'t> Props<'t> {
     pub fn int_in(&self, name: &str, default: i64, range: (i64, i64)) -> Result<i64, SceneError> {
         let v = self.or(name, default)?;
         if !(range.0..=range.1).contains(&v) {
-            return Err(self.error(self.pos(name), format!("'{name}' must be between {} and {}, not {v}", range.0, range.1)));
+            return Err(self.error(
+                self.pos(name),
+                format!(
+                    "'{name}' must be between {} and {}, not {v}",
+                    range.0, range.1
+                ),
+            ));
         }
         Ok(v)
     }
@@ -535,7 +628,10 @@ impl<'t> Props<'t> {
     pub fn choice(&self, name: &str, choices: &[&str]) -> Result<String, SceneError> {
         let v = self.or(name, choices[0].to_string())?.to_ascii_lowercase();
         if !choices.contains(&v.as_str()) {
-            return Err(self.error(self.pos(name), format!("'{name}' must be one of {}, not '{v}'", choices.join(", "))));
+            return Err(self.error(
+                self.pos(name),
+                format!("'{name}' must be one of {}, not '{v}'", choices.join(", ")),
+            ));
         }
         Ok(v)
     }
@@ -558,7 +654,10 @@ impl<'t> Props<'t> {
     pub fn object(&self, tag: &str) -> Result<Option<(&'t Element, Pos)>, SceneError> {
         let all = self.objects(tag);
         if let Some(second) = all.get(1) {
-            return Err(self.error(second.1, format!("{} takes a single <{tag}>", self.owner.describe())));
+            return Err(self.error(
+                second.1,
+                format!("{} takes a single <{tag}>", self.owner.describe()),
+            ));
         }
         Ok(all.first().copied())
     }
@@ -570,21 +669,23 @@ impl<'t> Props<'t> {
         }
     }
 
-    /// Warnings for the parameters nobody read (unknown or unsupported), with positions.
+    /// Warnings with positions: remarks, and the parameters nobody read (unknown or
+    /// unsupported).
     pub fn unused(&self) -> Vec<(Pos, String)> {
         let what = self.owner.describe();
-        self.items
-            .iter()
-            .filter(|i| !i.used.get())
-            .map(|i| {
-                let msg = match (&i.name, &i.value) {
-                    (Some(n), _) => format!("{what}: unknown or unsupported parameter '{n}' is ignored"),
-                    (None, Value::Object(e)) => format!("{what}: unexpected nested {} is ignored", e.describe()),
-                    (None, _) => format!("{what}: unnamed property is ignored"),
-                };
-                (i.pos, msg)
-            })
-            .collect()
+        let unused = self.items.iter().filter(|i| !i.used.get()).map(|i| {
+            let msg = match (&i.name, &i.value) {
+                (Some(n), _) => {
+                    format!("{what}: unknown or unsupported parameter '{n}' is ignored")
+                }
+                (None, Value::Object(e)) => {
+                    format!("{what}: unexpected nested {} is ignored", e.describe())
+                }
+                (None, _) => format!("{what}: unnamed property is ignored"),
+            };
+            (i.pos, msg)
+        });
+        self.notes.iter().cloned().chain(unused).collect()
     }
 }
 
@@ -604,11 +705,15 @@ fn camel_to_underscore(s: &str) -> String {
 
 /// A finite number.
 fn number(src: &SourceFile, a: &Attr) -> Result<f64, SceneError> {
-    parse_number(&a.value).ok_or_else(|| src.error(a.pos, format!("'{}' is not a finite number", a.value)))
+    parse_number(&a.value)
+        .ok_or_else(|| src.error(a.pos, format!("'{}' is not a finite number", a.value)))
 }
 
 fn parse_number(s: &str) -> Option<f64> {
-    s.trim().parse::<f64>().ok().filter(|x| x.is_finite() && x.abs() <= f32::MAX as f64)
+    s.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && x.abs() <= f32::MAX as f64)
 }
 
 /// The numbers of a list separated by commas and/or spaces.
@@ -616,13 +721,20 @@ fn numbers(src: &SourceFile, a: &Attr) -> Result<Vec<f64>, SceneError> {
     a.value
         .split(|c: char| c == ',' || c.is_whitespace())
         .filter(|t| !t.is_empty())
-        .map(|t| parse_number(t).ok_or_else(|| src.error(a.pos, format!("'{t}' is not a finite number"))))
+        .map(|t| {
+            parse_number(t).ok_or_else(|| src.error(a.pos, format!("'{t}' is not a finite number")))
+        })
         .collect()
 }
 
 /// x, y, z from the attributes `x`, `y`, `z` (missing ones are `default`) or from `value`
 /// (one number for all three, or three numbers).
-fn vector(src: &SourceFile, e: &Element, default: f64, required: bool) -> Result<[f64; 3], SceneError> {
+fn vector(
+    src: &SourceFile,
+    e: &Element,
+    default: f64,
+    required: bool,
+) -> Result<[f64; 3], SceneError> {
     if let Some(a) = e.attr("value") {
         if ["x", "y", "z"].iter().any(|n| e.attr(n).is_some()) {
             return Err(src.error(a.pos, "use either 'value' or 'x', 'y', 'z', not both"));
@@ -630,14 +742,25 @@ fn vector(src: &SourceFile, e: &Element, default: f64, required: bool) -> Result
         return match numbers(src, a)?.as_slice() {
             [v] => Ok([*v; 3]),
             [x, y, z] => Ok([*x, *y, *z]),
-            v => Err(src.error(a.pos, format!("'value' needs one or three numbers, not {}", v.len()))),
+            v => Err(src.error(
+                a.pos,
+                format!("'value' needs one or three numbers, not {}", v.len()),
+            )),
         };
     }
     let mut out = [default; 3];
     for (k, n) in ["x", "y", "z"].iter().enumerate() {
         match e.attr(n) {
             Some(a) => out[k] = number(src, a)?,
-            None if required => return Err(src.error(e.pos, format!("<{}> needs the attributes 'x', 'y' and 'z' (or 'value')", e.tag))),
+            None if required => {
+                return Err(src.error(
+                    e.pos,
+                    format!(
+                        "<{}> needs the attributes 'x', 'y' and 'z' (or 'value')",
+                        e.tag
+                    ),
+                ))
+            }
             None => {}
         }
     }
@@ -648,12 +771,20 @@ fn vector(src: &SourceFile, e: &Element, default: f64, required: bool) -> Result
 fn triple(src: &SourceFile, a: &Attr) -> Result<[f64; 3], SceneError> {
     match numbers(src, a)?.as_slice() {
         [x, y, z] => Ok([*x, *y, *z]),
-        v => Err(src.error(a.pos, format!("'{}' needs three numbers, not {}", a.name, v.len()))),
+        v => Err(src.error(
+            a.pos,
+            format!("'{}' needs three numbers, not {}", a.name, v.len()),
+        )),
     }
 }
 
-/// A `<transform>`: its children in order, each applied after the previous ones.
-fn transform(src: &SourceFile, e: &Element) -> Result<M4, SceneError> {
+/// A `<transform>`: its children in order, each applied after the previous ones. Remarks for the
+/// user go to `notes`.
+fn transform(
+    src: &SourceFile,
+    e: &Element,
+    notes: &mut Vec<(Pos, String)>,
+) -> Result<M4, SceneError> {
     let mut m = M4::IDENTITY;
     for c in &e.children {
         let err = |msg: &str| src.error(c.pos, msg.to_string());
@@ -661,12 +792,25 @@ fn transform(src: &SourceFile, e: &Element) -> Result<M4, SceneError> {
             "translate" => M4::translate(vector(src, c, 0.0, false)?),
             "scale" => M4::scale(vector(src, c, 1.0, false)?),
             "rotate" => {
-                let angle = c.attr("angle").ok_or_else(|| err("<rotate> needs the attribute 'angle' (degrees)"))?;
+                let angle = c
+                    .attr("angle")
+                    .ok_or_else(|| err("<rotate> needs the attribute 'angle' (degrees)"))?;
                 let angle = number(src, angle)?;
-                M4::rotate(vector(src, c, 0.0, false)?, angle).ok_or_else(|| err("the rotation axis is zero"))?
+                let axis = vector(src, c, 0.0, false)?;
+                let len = axis.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if (len - 1.0).abs() > 1e-4 && len > 0.0 {
+                    notes.push((
+                        c.pos,
+                        format!("the rotation axis has length {len:.4}: like Mitsuba 3, candela does not normalise it, so this rotation also scales"),
+                    ));
+                }
+                M4::rotate(axis, angle).ok_or_else(|| err("the rotation axis is zero"))?
             }
             "lookat" => {
-                let get = |n: &str| c.attr(n).ok_or_else(|| err(&format!("<lookat> needs the attribute '{n}'")));
+                let get = |n: &str| {
+                    c.attr(n)
+                        .ok_or_else(|| err(&format!("<lookat> needs the attribute '{n}'")))
+                };
                 let origin = triple(src, get("origin")?)?;
                 let target = triple(src, get("target")?)?;
                 let up = match c.attr("up") {
@@ -678,9 +822,16 @@ fn transform(src: &SourceFile, e: &Element) -> Result<M4, SceneError> {
                 })?
             }
             "matrix" => {
-                let a = c.attr("value").ok_or_else(|| err("<matrix> needs the attribute 'value'"))?;
+                let a = c
+                    .attr("value")
+                    .ok_or_else(|| err("<matrix> needs the attribute 'value'"))?;
                 let v = numbers(src, a)?;
-                M4::from_values(&v).ok_or_else(|| src.error(a.pos, format!("a matrix needs 9 or 16 numbers, not {}", v.len())))?
+                M4::from_values(&v).ok_or_else(|| {
+                    src.error(
+                        a.pos,
+                        format!("a matrix needs 9 or 16 numbers, not {}", v.len()),
+                    )
+                })?
             }
             t => return Err(err(&format!("<{t}> cannot appear inside a <transform>"))),
         };
@@ -699,14 +850,17 @@ mod tests {
         assert_eq!(l.pos(0), Pos::new(1, 1));
         assert_eq!(l.pos(3), Pos::new(2, 1));
         assert_eq!(l.pos(7), Pos::new(2, 4));
-        assert_eq!(l.pos(9), Pos::new(3, 1));
+        assert_eq!(l.pos(8), Pos::new(3, 1));
         assert_eq!(l.pos(100), Pos::new(3, 2));
     }
 
     #[test]
     fn camel_case_upgrade() {
         assert_eq!(camel_to_underscore("intIOR"), "int_ior");
-        assert_eq!(camel_to_underscore("diffuseReflectance"), "diffuse_reflectance");
+        assert_eq!(
+            camel_to_underscore("diffuseReflectance"),
+            "diffuse_reflectance"
+        );
         assert_eq!(camel_to_underscore("toWorld"), "to_world");
         assert_eq!(camel_to_underscore("alpha"), "alpha");
     }
