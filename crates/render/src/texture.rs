@@ -3,7 +3,8 @@
 //! - `uniform(<c>)`: the same colour everywhere.
 //! - `checkered(<c1>, <c2>, n)`: `c1` where ⌊u·n⌋ and ⌊v·n⌋ have the same parity, else `c2`.
 //! - `image("file")`: the image pixel at column ⌊u·W⌋ and row ⌊v·H⌋ (row 0 at the top; clamped)
-//!   with nearest filtering, as in the course; bilinear filtering is optional.
+//!   with nearest filtering, as in the course. Image textures may also filter bilinearly, repeat
+//!   instead of clamping, and scale and offset (u, v) first (Mitsuba's `bitmap` and `envmap`).
 
 use crate::color::Rgb;
 use crate::image::Image;
@@ -17,6 +18,78 @@ pub enum Filter {
     Nearest,
     /// Bilinear interpolation of the four nearest pixel centres (wrapping in u).
     Bilinear,
+}
+
+/// What an image lookup does outside [0, 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    /// Clamp to the border pixels (the course).
+    Clamp,
+    /// Repeat the image periodically.
+    Repeat,
+}
+
+/// An image mapped onto the uv square: the lookup point is `uv·scale + offset`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageTexture {
+    /// The pixels (linear).
+    pub image: Arc<Image>,
+    /// The lookup.
+    pub filter: Filter,
+    /// Behaviour outside [0, 1) in u and in v.
+    pub wrap: [Wrap; 2],
+    /// Scales uv before the lookup.
+    pub scale: [f32; 2],
+    /// Added to uv after scaling.
+    pub offset: [f32; 2],
+}
+
+impl ImageTexture {
+    /// The course's lookup of `image`: nearest pixel, clamped, uv as is.
+    pub fn new(image: Arc<Image>) -> Self {
+        Self {
+            image,
+            filter: Filter::Nearest,
+            wrap: [Wrap::Clamp; 2],
+            scale: [1.0, 1.0],
+            offset: [0.0, 0.0],
+        }
+    }
+
+    /// The colour at (u, v).
+    #[inline]
+    pub fn eval(&self, uv: Point2) -> Rgb {
+        let (w, h) = (self.image.width(), self.image.height());
+        if w == 0 || h == 0 {
+            return Rgb::BLACK;
+        }
+        let u = uv.x * self.scale[0] + self.offset[0];
+        let v = uv.y * self.scale[1] + self.offset[1];
+        let index = |i: i64, n: usize, wrap: Wrap| match wrap {
+            Wrap::Clamp => i.clamp(0, n as i64 - 1) as usize,
+            Wrap::Repeat => i.rem_euclid(n as i64) as usize,
+        };
+        match self.filter {
+            Filter::Nearest => {
+                let col = index((u * w as f32).floor() as i64, w, self.wrap[0]);
+                let row = index((v * h as f32).floor() as i64, h, self.wrap[1]);
+                self.image.get(col, row)
+            }
+            Filter::Bilinear => {
+                let x = u * w as f32 - 0.5;
+                let y = v * h as f32 - 0.5;
+                let (x0, y0) = (x.floor(), y.floor());
+                let (fx, fy) = (x - x0, y - y0);
+                let (x0, y0) = (x0 as i64, y0 as i64);
+                let px = |i: i64| index(i, w, self.wrap[0]);
+                let py = |j: i64| index(j, h, self.wrap[1]);
+                let img = &self.image;
+                let a = img.get(px(x0), py(y0)) * (1.0 - fx) + img.get(px(x0 + 1), py(y0)) * fx;
+                let b = img.get(px(x0), py(y0 + 1)) * (1.0 - fx) + img.get(px(x0 + 1), py(y0 + 1)) * fx;
+                a * (1.0 - fy) + b * fy
+            }
+        }
+    }
 }
 
 /// The closed set of textures.
@@ -34,14 +107,7 @@ pub enum Texture {
         steps: u32,
     },
     /// An image mapped onto the uv square.
-    Image {
-        /// The pixels (linear).
-        image: Arc<Image>,
-        /// The lookup.
-        filter: Filter,
-        /// Scales uv before the lookup (1 = the image covers the unit square once).
-        scale: [f32; 2],
-    },
+    Image(ImageTexture),
 }
 
 impl Texture {
@@ -60,13 +126,7 @@ impl Texture {
                     *c2
                 }
             }
-            Texture::Image { image, filter, scale } => {
-                let (u, v) = (uv.x * scale[0], uv.y * scale[1]);
-                match filter {
-                    Filter::Nearest => nearest(image, u, v),
-                    Filter::Bilinear => bilinear(image, u, v),
-                }
-            }
+            Texture::Image(t) => t.eval(uv),
         }
     }
 
@@ -75,8 +135,8 @@ impl Texture {
         match self {
             Texture::Uniform(c) => *c,
             Texture::Checkered { c1, c2, .. } => (*c1 + *c2) * 0.5,
-            Texture::Image { image, .. } => {
-                let m = image.mean();
+            Texture::Image(t) => {
+                let m = t.image.mean();
                 Rgb::new(m[0] as f32, m[1] as f32, m[2] as f32)
             }
         }
@@ -87,36 +147,9 @@ impl Texture {
         match self {
             Texture::Uniform(c) => c.max_component(),
             Texture::Checkered { c1, c2, .. } => c1.max_component().max(c2.max_component()),
-            Texture::Image { image, .. } => image.pixels().iter().fold(0.0, |m, p| m.max(p.max_component())),
+            Texture::Image(t) => t.image.pixels().iter().fold(0.0, |m, p| m.max(p.max_component())),
         }
     }
-}
-
-fn nearest(image: &Image, u: f32, v: f32) -> Rgb {
-    let (w, h) = (image.width(), image.height());
-    if w == 0 || h == 0 {
-        return Rgb::BLACK;
-    }
-    let col = ((u * w as f32) as i64).clamp(0, w as i64 - 1) as usize;
-    let row = ((v * h as f32) as i64).clamp(0, h as i64 - 1) as usize;
-    image.get(col, row)
-}
-
-fn bilinear(image: &Image, u: f32, v: f32) -> Rgb {
-    let (w, h) = (image.width(), image.height());
-    if w == 0 || h == 0 {
-        return Rgb::BLACK;
-    }
-    let x = u * w as f32 - 0.5;
-    let y = v * h as f32 - 0.5;
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let px = |i: i64| i.rem_euclid(w as i64) as usize;
-    let py = |j: i64| j.clamp(0, h as i64 - 1) as usize;
-    let (x0, y0) = (x0 as i64, y0 as i64);
-    let a = image.get(px(x0), py(y0)) * (1.0 - fx) + image.get(px(x0 + 1), py(y0)) * fx;
-    let b = image.get(px(x0), py(y0 + 1)) * (1.0 - fx) + image.get(px(x0 + 1), py(y0 + 1)) * fx;
-    a * (1.0 - fy) + b * fy
 }
 
 #[cfg(test)]
@@ -142,7 +175,7 @@ mod tests {
         img.set(1, 0, Rgb::new(2.0, 3.0, 1.0));
         img.set(0, 1, Rgb::new(2.0, 1.0, 3.0));
         img.set(1, 1, Rgb::new(3.0, 2.0, 1.0));
-        let t = Texture::Image { image: Arc::new(img), filter: Filter::Nearest, scale: [1.0, 1.0] };
+        let t = Texture::Image(ImageTexture::new(Arc::new(img)));
         assert_eq!(t.eval(Point2::new(0.0, 0.0)), Rgb::new(1.0, 2.0, 3.0));
         assert_eq!(t.eval(Point2::new(1.0, 0.0)), Rgb::new(2.0, 3.0, 1.0));
         assert_eq!(t.eval(Point2::new(0.0, 1.0)), Rgb::new(2.0, 1.0, 3.0));
@@ -154,9 +187,19 @@ mod tests {
         let mut img = Image::new(2, 1);
         img.set(0, 0, Rgb::splat(0.0));
         img.set(1, 0, Rgb::splat(1.0));
-        let t = Texture::Image { image: Arc::new(img), filter: Filter::Bilinear, scale: [1.0, 1.0] };
+        let mut t = ImageTexture::new(Arc::new(img));
+        t.filter = Filter::Bilinear;
+        t.wrap = [Wrap::Clamp; 2];
         assert!((t.eval(Point2::new(0.5, 0.5)).r - 0.5).abs() < 1e-6);
         assert!((t.eval(Point2::new(0.75, 0.5)).r - 1.0).abs() < 1e-6);
         assert!((t.eval(Point2::new(0.25, 0.5)).r - 0.0).abs() < 1e-6);
+        // Repeating, the left border blends with the right column.
+        t.wrap = [Wrap::Repeat; 2];
+        assert!((t.eval(Point2::new(0.0, 0.5)).r - 0.5).abs() < 1e-6);
+        // Nearest with repeat wraps whole images; offset shifts the lookup.
+        t.filter = Filter::Nearest;
+        assert_eq!(t.eval(Point2::new(1.25, 0.5)).r, 0.0);
+        t.offset = [0.5, 0.0];
+        assert_eq!(t.eval(Point2::new(0.25, 0.5)).r, 1.0);
     }
 }

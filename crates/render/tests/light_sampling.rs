@@ -20,7 +20,7 @@ use candela_render::sampling::Pcg32;
 use candela_render::scene::Emission;
 use candela_render::shape::{Cube, Disk, Mesh, Parallelogram, Shape, Sphere};
 use candela_render::stats::RayStats;
-use candela_render::texture::{Filter, Texture};
+use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene, SceneBuilder};
 use chi2::{mean_and_error, sidak, Chi2, Grid, ALPHA};
 
@@ -292,11 +292,7 @@ fn env_image() -> Texture {
     for x in 0..w {
         img.set(x, 17, Rgb::BLACK);
     }
-    Texture::Image {
-        image: Arc::new(img),
-        filter: Filter::Nearest,
-        scale: [1.0, 1.0],
-    }
+    Texture::Image(ImageTexture::new(Arc::new(img)))
 }
 
 fn env_transform() -> Transform {

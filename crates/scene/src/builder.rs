@@ -16,7 +16,7 @@ use candela_render::scene::{Emission, SceneBuilder};
 use candela_render::shape::{
     Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polyhedron, Shape, Solid, Sphere,
 };
-use candela_render::texture::{Filter, Texture};
+use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene};
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -107,11 +107,7 @@ impl Builder<'_> {
                 if image.width() == 0 || image.height() == 0 {
                     return Err(self.err(file.pos, format!("image '{}' is empty", file.name)));
                 }
-                Texture::Image {
-                    image,
-                    filter: Filter::Nearest,
-                    scale: [1.0, 1.0],
-                }
+                Texture::Image(ImageTexture::new(image))
             }
         })
     }

@@ -10,7 +10,7 @@ use candela_render::math::{Point3, Ray, Vec3};
 use candela_render::render::{render, RenderSettings};
 use candela_render::shape::Shape;
 use candela_render::stats::RayStats;
-use candela_render::texture::{Filter, Texture};
+use candela_render::texture::{Filter, Texture, ImageTexture};
 use candela_render::{Image, Rgb};
 use candela_scene::mitsuba::load_mitsuba;
 use candela_scene::{LoadOptions, LoadedScene, SceneError};
@@ -673,11 +673,12 @@ fn textures() {
     let o = l.scene.geometry.objects();
     let Model::Diffuse {
         reflectance:
-            Texture::Image {
+            Texture::Image(ImageTexture {
                 image,
                 filter,
                 scale,
-            },
+                ..
+            }),
     } = &l.scene.materials[o[0].props.material as usize].model
     else {
         panic!()
@@ -744,7 +745,7 @@ fn emitters() {
     assert!(s.position.approx_eq(Point3::new(0.0, 4.0, 0.0), 1e-6) && close(s.axis, -Vec3::Y));
     // beam_width defaults to 3/4 of the cut-off angle.
     assert!((s.cos_cutoff - 30f32.to_radians().cos()).abs() < 1e-6);
-    assert_eq!(s.profile, SpotProfile::Smooth(22.5f32.to_radians().cos()));
+    assert_eq!(s.profile, SpotProfile::Linear(22.5f32.to_radians().cos()));
     let Light::Distant(d, _) = &lights[2] else {
         panic!()
     };

@@ -30,8 +30,8 @@ impl Environment {
     /// An environment light; image maps get a sampling distribution.
     pub fn new(radiance: Texture, world_from_env: Transform) -> Self {
         let distribution = match &radiance {
-            Texture::Image { image, .. } if image.width() > 0 && image.height() > 0 => {
-                let (w, h) = (image.width(), image.height());
+            Texture::Image(t) if t.image.width() > 0 && t.image.height() > 0 => {
+                let (w, h) = (t.image.width(), t.image.height());
                 let mut f = Vec::with_capacity(w * h);
                 for y in 0..h {
                     let sin = (PI * (y as f32 + 0.5) / h as f32).sin();
@@ -181,11 +181,7 @@ mod tests {
             p.g += 0.1;
             p.b += 0.1;
         }
-        let tex = Texture::Image {
-            image: Arc::new(img),
-            filter: crate::texture::Filter::Nearest,
-            scale: [1.0, 1.0],
-        };
+        let tex = Texture::Image(crate::texture::ImageTexture::new(Arc::new(img)));
         let e = Environment::new(tex, Transform::IDENTITY);
         let mut rng = crate::sampling::Pcg32::new(2, 3);
         // ∫ pdf dω = 1 by a Monte Carlo estimate over uniform directions.

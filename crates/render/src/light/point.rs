@@ -7,8 +7,8 @@
 //!   the physical inverse-square law, i.e. r = 1.
 //! - `spot_light([pos], [dir], <I>, cutoff_deg, k [, attenuation(…)] [, components(…)])`:
 //!   I·(ω·s)^k inside the cut-off cone around the axis s, 0 outside. Mitsuba `spot`
-//!   (`intensity`, `cutoff_angle` 20°, `beam_width` 3/4 of it) uses its smooth fall-off
-//!   between beam width and cut-off, and the inverse-square law.
+//!   (`intensity`, `cutoff_angle` 20°, `beam_width` 3/4 of it) falls off linearly in the angle
+//!   between beam width and cut-off, and follows the inverse-square law.
 
 use crate::color::Rgb;
 use crate::math::{Point3, Vec3};
@@ -46,9 +46,9 @@ impl Falloff {
 pub enum SpotProfile {
     /// The lecture's (ω·s)^k.
     Power(f32),
-    /// Mitsuba's smooth step from the beam width (full intensity) to the cut-off (zero):
-    /// the cosine of the beam width.
-    Smooth(f32),
+    /// Mitsuba's fall-off, linear in the angle from the beam width (full intensity) to the
+    /// cut-off (zero): the cosine of the beam width.
+    Linear(f32),
 }
 
 /// A point light.
@@ -89,14 +89,12 @@ impl SpotLight {
         }
         match self.profile {
             SpotProfile::Power(k) => c.max(0.0).powf(k),
-            SpotProfile::Smooth(cos_beam) => {
+            SpotProfile::Linear(cos_beam) => {
                 if c >= cos_beam {
                     1.0
                 } else {
-                    // Mitsuba's smooth step in the angle between beam width and cut-off.
                     let (a, b, x) = (self.cos_cutoff.acos(), cos_beam.acos(), c.clamp(-1.0, 1.0).acos());
-                    let t = ((a - x) / (a - b)).clamp(0.0, 1.0);
-                    t * t * (3.0 - 2.0 * t)
+                    ((a - x) / (a - b)).clamp(0.0, 1.0)
                 }
             }
         }
@@ -142,11 +140,13 @@ mod tests {
         let outside = Vec3::new(31f32.to_radians().sin(), 0.0, 31f32.to_radians().cos());
         assert_eq!(s.profile(outside), 0.0);
         let m = SpotLight {
-            profile: SpotProfile::Smooth(20f32.to_radians().cos()),
+            profile: SpotProfile::Linear(20f32.to_radians().cos()),
             ..s
         };
         assert_eq!(m.profile(Vec3::Z), 1.0);
         let mid = Vec3::new(25f32.to_radians().sin(), 0.0, 25f32.to_radians().cos());
         assert!((m.profile(mid) - 0.5).abs() < 1e-4);
+        let quarter = Vec3::new(27.5f32.to_radians().sin(), 0.0, 27.5f32.to_radians().cos());
+        assert!((m.profile(quarter) - 0.25).abs() < 1e-4);
     }
 }

@@ -12,7 +12,7 @@ use crate::error::{Pos, SceneError};
 use candela_render::material::{
     Distribution, Material, MaterialId, Microfacet, Model, RoughCoating,
 };
-use candela_render::texture::{Filter, Texture};
+use candela_render::texture::{Filter, ImageTexture, Texture, Wrap};
 use candela_render::{Image, Rgb};
 use std::sync::Arc;
 
@@ -259,16 +259,19 @@ impl<'t> Loader<'t> {
                     "nearest" => Filter::Nearest,
                     _ => Filter::Bilinear,
                 };
-                if scale.iter().any(|s| *s > 1.0) {
-                    return Err(p.error(p.pos("to_uv"), "to_uv scalings above 1 repeat the image, which candela's image lookup cannot do"));
-                }
-                // Within [0,1]², Mitsuba's wrap modes differ only at the image's border.
-                p.ignore(&["wrap_mode", "format", "accel"]);
-                Texture::Image {
+                let wrap = match p.choice("wrap_mode", &["repeat", "clamp", "mirror"])?.as_str() {
+                    "clamp" => Wrap::Clamp,
+                    "mirror" => return Err(p.error(p.pos("wrap_mode"), "wrap_mode 'mirror' is not supported (use repeat or clamp)")),
+                    _ => Wrap::Repeat,
+                };
+                p.ignore(&["format", "accel"]);
+                Texture::Image(ImageTexture {
                     image: self.image(&name, raw, pos)?,
                     filter,
+                    wrap: [wrap; 2],
                     scale,
-                }
+                    offset: [0.0, 0.0],
+                })
             }
             "checkerboard" => {
                 let (c1, c2) = (

@@ -56,7 +56,7 @@ use candela_render::material::MaterialId;
 use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::scene::SceneBuilder;
 use candela_render::shape::Mesh;
-use candela_render::texture::{Filter, Texture};
+use candela_render::texture::{Filter, ImageTexture, Texture, Wrap};
 use candela_render::{Image, Rgb};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -686,7 +686,7 @@ impl<'t> Loader<'t> {
                             axis,
                             intensity,
                             cos_cutoff: cutoff.to_radians().cos() as f32,
-                            profile: SpotProfile::Smooth(beam.to_radians().cos() as f32),
+                            profile: SpotProfile::Linear(beam.to_radians().cos() as f32),
                             falloff: Falloff::INVERSE_SQUARE,
                         },
                         Components::from_intensity(intensity),
@@ -723,11 +723,15 @@ impl<'t> Loader<'t> {
                 // With d = (l.y, l.z, -l.x) both find the same texel.
                 let d_from_l = M4::from_columns([0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0; 3]);
                 let t = m.mul(&d_from_l).to_transform().ok_or_else(|| p.error(p.pos("to_world"), "the transformation is singular"))?;
-                let tex = Texture::Image {
-                    image,
+                // Mitsuba puts row centres at v = row/(h − 1), repeats in u and clamps in v.
+                let h = image.height() as f32;
+                let tex = Texture::Image(ImageTexture {
                     filter: Filter::Bilinear,
-                    scale: [1.0, 1.0],
-                };
+                    wrap: [Wrap::Repeat, Wrap::Clamp],
+                    scale: [1.0, (h - 1.0) / h],
+                    offset: [0.0, 0.5 / h],
+                    image,
+                });
                 Light::Environment(Environment::new(tex, t))
             }
             "area" => return Err(self.err(e.pos, "an area emitter must be nested in a <shape>")),
