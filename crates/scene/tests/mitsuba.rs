@@ -824,9 +824,8 @@ fn environment_map_follows_mitsubas_lat_long_convention() {
     // v = acos(d.y)/π. Pick directions at texel centres, where bilinear filtering is exact.
     let rot = candela_render::math::Transform::rotation(Vec3::Y, 90.0).unwrap();
     for (col, row) in [(0usize, 1usize), (2, 1), (5, 2), (7, 2)] {
-        // The texel centre is at u = (col + ½)/w; rows sit at v = row/(h-1) in Mitsuba but at
-        // (row + ½)/h in candela: compare on the row centres candela uses.
-        let (u, v) = ((col as f32 + 0.5) / w as f32, (row as f32 + 0.5) / h as f32);
+        // The texel centre is at u = (col + ½)/w, and rows sit at v = row/(h − 1) in Mitsuba.
+        let (u, v) = ((col as f32 + 0.5) / w as f32, row as f32 / (h - 1) as f32);
         let (phi, theta) = (u * 2.0 * std::f32::consts::PI, v * std::f32::consts::PI);
         let d = Vec3::new(
             phi.sin() * theta.sin(),
