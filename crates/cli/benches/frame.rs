@@ -33,16 +33,34 @@ fn frame(b: Bencher, loaded: candela_scene::LoadedScene, integrator: &str, size:
 
 #[divan::bench(sample_count = 5)]
 fn demo_path_128px_16spp(b: Bencher) {
-    frame(b, demo_scene(&LoadOptions::default()).unwrap(), "path", 128, 16);
+    frame(
+        b,
+        demo_scene(&LoadOptions::default()).unwrap(),
+        "path",
+        128,
+        16,
+    );
 }
 
 #[divan::bench(sample_count = 5)]
 fn demo_whitted_256px(b: Bencher) {
-    frame(b, demo_scene(&LoadOptions::default()).unwrap(), "whitted", 256, 1);
+    frame(
+        b,
+        demo_scene(&LoadOptions::default()).unwrap(),
+        "whitted",
+        256,
+        1,
+    );
 }
 
 #[divan::bench(sample_count = 5)]
 fn cornell_path_128px_16spp(b: Bencher) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cornell-box.xml");
-    frame(b, load_scene(&path, &LoadOptions::default()).unwrap(), "path", 128, 16);
+    frame(
+        b,
+        load_scene(&path, &LoadOptions::default()).unwrap(),
+        "path",
+        128,
+        16,
+    );
 }

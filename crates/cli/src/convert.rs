@@ -6,9 +6,13 @@ use anyhow::{bail, Context, Result};
 /// Runs the conversion.
 pub fn run(a: ConvertArgs) -> Result<()> {
     if !candela_imageio::supported_extension(&a.output) {
-        bail!("'{}': unknown output format (use .png, .pfm or .exr)", a.output.display());
+        bail!(
+            "'{}': unknown output format (use .png, .pfm or .exr)",
+            a.output.display()
+        );
     }
-    let img = candela_imageio::read_image(&a.input).with_context(|| format!("reading '{}'", a.input.display()))?;
+    let img = candela_imageio::read_image(&a.input)
+        .with_context(|| format!("reading '{}'", a.input.display()))?;
     candela_imageio::write_image(&a.output, &img, &crate::run::tone_map(&a.tone, 1.0))
         .with_context(|| format!("writing '{}'", a.output.display()))?;
     Ok(())

@@ -5,7 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn candela(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_candela")).args(args).output().expect("the binary runs")
+    Command::new(env!("CARGO_BIN_EXE_candela"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
 }
 
 fn repo() -> PathBuf {
@@ -36,7 +39,10 @@ fn every_example_renders() {
             continue;
         }
         n += 1;
-        let out = dir.join(format!("{}.pfm", path.file_stem().unwrap().to_str().unwrap()));
+        let out = dir.join(format!(
+            "{}.pfm",
+            path.file_stem().unwrap().to_str().unwrap()
+        ));
         for integrator in ["path", "whitted", "normals"] {
             let o = candela(&[
                 "render",
@@ -53,7 +59,12 @@ fn every_example_renders() {
                 "-o",
                 out.to_str().unwrap(),
             ]);
-            assert!(o.status.success(), "{} ({integrator}): {}", path.display(), stderr(&o));
+            assert!(
+                o.status.success(),
+                "{} ({integrator}): {}",
+                path.display(),
+                stderr(&o)
+            );
             assert!(out.exists());
         }
     }
@@ -66,17 +77,39 @@ fn every_example_renders() {
 fn scene_errors_have_positions_and_leave_no_output() {
     let dir = scratch("errors");
     let cases = [
-        ("unknown material", "material m(diffuse(<1, 1, 1>))\nsphere(nope, identity)\n", "2:8"),
+        (
+            "unknown material",
+            "material m(diffuse(<1, 1, 1>))\nsphere(nope, identity)\n",
+            "2:8",
+        ),
         ("bad token", "material m(diffuse(<1, 1, 1>))\n  $\n", "2:3"),
-        ("second camera", "camera(orthogonal, identity, 1, 1)\ncamera(orthogonal, identity, 1, 1)\n", "2:1"),
-        ("missing mesh", "material m(diffuse(<1, 1, 1>))\nmesh(m, identity, \"nowhere.obj\")\n", "2:"),
-        ("singular transform", "material m(diffuse(<1, 1, 1>))\nsphere(m, scaling([1, 0, 1]))\n", "2:"),
+        (
+            "second camera",
+            "camera(orthogonal, identity, 1, 1)\ncamera(orthogonal, identity, 1, 1)\n",
+            "2:1",
+        ),
+        (
+            "missing mesh",
+            "material m(diffuse(<1, 1, 1>))\nmesh(m, identity, \"nowhere.obj\")\n",
+            "2:",
+        ),
+        (
+            "singular transform",
+            "material m(diffuse(<1, 1, 1>))\nsphere(m, scaling([1, 0, 1]))\n",
+            "2:",
+        ),
     ];
     for (what, text, pos) in cases {
         let scene = dir.join("bad.scene");
         std::fs::write(&scene, text).unwrap();
         let out = dir.join("out.png");
-        let o = candela(&["render", scene.to_str().unwrap(), "-q", "-o", out.to_str().unwrap()]);
+        let o = candela(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
         let err = stderr(&o);
         assert!(!o.status.success(), "{what}: accepted");
         assert!(err.contains(&format!("bad.scene:{pos}")), "{what}: {err}");
@@ -98,7 +131,10 @@ fn option_errors_name_the_option() {
         (vec!["demo", "--width", "0", "-o", o], "--width"),
         (vec!["demo", "--height", "99999999", "-o", o], "--height"),
         (vec!["demo", "--spp", "abc", "-o", o], "--spp"),
-        (vec!["demo", "--integrator", "magic", "-o", o], "--integrator"),
+        (
+            vec!["demo", "--integrator", "magic", "-o", o],
+            "--integrator",
+        ),
         (vec!["demo", "--accel", "magic", "-o", o], "--accel"),
         (vec!["demo", "-o", "picture.bmp"], "--output"),
         (vec!["demo", "--threads", "0", "-o", o], "--threads"),
@@ -119,7 +155,19 @@ fn images_do_not_depend_on_the_thread_count() {
     let run = |threads: &str, name: &str| {
         let out = dir.join(name);
         let o = candela(&[
-            "demo", "--width", "40", "--height", "30", "--spp", "4", "--seed", "5", "--threads", threads, "-q", "-o",
+            "demo",
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--spp",
+            "4",
+            "--seed",
+            "5",
+            "--threads",
+            threads,
+            "-q",
+            "-o",
             out.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
@@ -157,7 +205,11 @@ fn convert_tone_maps_by_the_course_formulas() {
     // Decoding applies the sRGB curve; re-encode to get the stored byte back.
     let byte = (candela_imageio::tonemap::srgb_oetf(decoded.get(0, 0).r) * 255.0).round() as u8;
     assert_eq!(byte, 38);
-    let bad = candela(&["convert", dir.join("missing.pfm").to_str().unwrap(), png.to_str().unwrap()]);
+    let bad = candela(&[
+        "convert",
+        dir.join("missing.pfm").to_str().unwrap(),
+        png.to_str().unwrap(),
+    ]);
     assert!(!bad.status.success() && stderr(&bad).contains("missing.pfm"));
 }
 
@@ -166,7 +218,17 @@ fn convert_tone_maps_by_the_course_formulas() {
 fn stats_report_rays_and_speed() {
     let dir = scratch("stats");
     let out = dir.join("d.png");
-    let o = candela(&["demo", "--width", "32", "--height", "24", "--stats", "-q", "-o", out.to_str().unwrap()]);
+    let o = candela(&[
+        "demo",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--stats",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let err = stderr(&o);
     assert!(err.contains("Mrays/s") && err.contains("rays"), "{err}");

@@ -7,10 +7,21 @@ use candela_render::Image;
 use candela_scene::{load_scene, LoadOptions};
 use std::path::Path;
 
-fn render_example(name: &str, integrator: &str, settings: IntegratorSettings, spp: u32, seed: u64) -> Image {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples").join(name);
+fn render_example(
+    name: &str,
+    integrator: &str,
+    settings: IntegratorSettings,
+    spp: u32,
+    seed: u64,
+) -> Image {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name);
     let loaded = load_scene(&path, &LoadOptions::default()).unwrap();
-    let integ = IntegratorKind::from_name(integrator).unwrap().build(&loaded.scene, &settings).unwrap();
+    let integ = IntegratorKind::from_name(integrator)
+        .unwrap()
+        .build(&loaded.scene, &settings)
+        .unwrap();
     let rs = RenderSettings {
         width: 24,
         height: 24,
@@ -39,19 +50,38 @@ fn mean_and_error(images: &[Image]) -> ([f64; 3], [f64; 3]) {
 /// the image means agree within 4 combined standard errors.
 #[test]
 fn course_demo_estimators_agree() {
-    let nee: Vec<Image> = (0..6).map(|s| render_example("course-demo.scene", "path", IntegratorSettings::default(), 32, s)).collect();
+    let nee: Vec<Image> = (0..6)
+        .map(|s| {
+            render_example(
+                "course-demo.scene",
+                "path",
+                IntegratorSettings::default(),
+                32,
+                s,
+            )
+        })
+        .collect();
     let course_settings = IntegratorSettings {
         num_of_rays: 3,
         rr_depth: Some(3),
         max_depth: Some(12),
         ..Default::default()
     };
-    let course: Vec<Image> = (10..16).map(|s| render_example("course-demo.scene", "path", course_settings.clone(), 8, s)).collect();
+    let course: Vec<Image> = (10..16)
+        .map(|s| render_example("course-demo.scene", "path", course_settings.clone(), 8, s))
+        .collect();
     let (a, ea) = mean_and_error(&nee);
     let (b, eb) = mean_and_error(&course);
     for c in 0..3 {
         let z = (a[c] - b[c]).abs() / (ea[c] * ea[c] + eb[c] * eb[c]).sqrt().max(1e-6);
-        assert!(z < 4.0, "channel {c}: path {} ± {}, course {} ± {} (z = {z:.2})", a[c], ea[c], b[c], eb[c]);
+        assert!(
+            z < 4.0,
+            "channel {c}: path {} ± {}, course {} ± {} (z = {z:.2})",
+            a[c],
+            ea[c],
+            b[c],
+            eb[c]
+        );
         assert!(a[c] > 0.01);
     }
     for img in nee.iter().chain(&course) {
@@ -63,9 +93,24 @@ fn course_demo_estimators_agree() {
 /// tracer: two seeds agree within their noise, and no pixel is NaN.
 #[test]
 fn language_materials_under_path() {
-    let imgs: Vec<Image> = (0..6).map(|s| render_example("materials.scene", "path", IntegratorSettings::default(), 16, s)).collect();
+    let imgs: Vec<Image> = (0..6)
+        .map(|s| {
+            render_example(
+                "materials.scene",
+                "path",
+                IntegratorSettings::default(),
+                16,
+                s,
+            )
+        })
+        .collect();
     let (m, e) = mean_and_error(&imgs);
     for c in 0..3 {
-        assert!(m[c] > 0.0 && e[c] < 0.05 * m[c], "channel {c}: {} ± {}", m[c], e[c]);
+        assert!(
+            m[c] > 0.0 && e[c] < 0.05 * m[c],
+            "channel {c}: {} ± {}",
+            m[c],
+            e[c]
+        );
     }
 }

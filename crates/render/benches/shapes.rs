@@ -17,7 +17,11 @@ fn rays() -> Vec<Ray> {
     (0..RAYS)
         .map(|_| {
             let o = warp::square_to_uniform_sphere([rng.next_f32(), rng.next_f32()]) * 4.0;
-            let t = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * 3.0;
+            let t = Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            ) * 3.0;
             Ray::new(o.to_point(), t - o)
         })
         .collect()
@@ -36,7 +40,12 @@ fn bench_shape(b: Bencher, shape: Shape) {
 
 #[divan::bench]
 fn sphere(b: Bencher) {
-    bench_shape(b, Shape::Sphere(Sphere::new(Transform::rotation_z(20.0) * Transform::scaling(Vec3::new(1.0, 0.7, 1.2)))));
+    bench_shape(
+        b,
+        Shape::Sphere(Sphere::new(
+            Transform::rotation_z(20.0) * Transform::scaling(Vec3::new(1.0, 0.7, 1.2)),
+        )),
+    );
 }
 
 #[divan::bench]
@@ -51,14 +60,23 @@ fn plane(b: Bencher) {
 
 #[divan::bench]
 fn parallelogram(b: Bencher) {
-    let p = Parallelogram::new(Point3::new(-1.0, -1.0, 0.0), Vec3::new(2.0, 0.0, 0.2), Vec3::new(0.0, 2.0, 0.0)).unwrap();
+    let p = Parallelogram::new(
+        Point3::new(-1.0, -1.0, 0.0),
+        Vec3::new(2.0, 0.0, 0.2),
+        Vec3::new(0.0, 2.0, 0.0),
+    )
+    .unwrap();
     bench_shape(b, Shape::Parallelogram(p));
 }
 
 #[divan::bench]
 fn triangle(b: Bencher) {
     let m = Mesh {
-        positions: vec![Point3::new(-1.0, -1.0, 0.0), Point3::new(1.0, -1.0, 0.1), Point3::new(0.0, 1.0, -0.1)],
+        positions: vec![
+            Point3::new(-1.0, -1.0, 0.0),
+            Point3::new(1.0, -1.0, 0.1),
+            Point3::new(0.0, 1.0, -0.1),
+        ],
         indices: vec![[0, 1, 2]],
         ..Default::default()
     };

@@ -56,8 +56,16 @@ impl Camera {
     }
 
     /// A perspective camera from its vertical field of view in degrees (0 < fov < 180).
-    pub fn perspective_fov(vertical_fov_deg: f32, aspect_ratio: f32, world_from_camera: Transform) -> Self {
-        Self::perspective(distance_for_fov(vertical_fov_deg), aspect_ratio, world_from_camera)
+    pub fn perspective_fov(
+        vertical_fov_deg: f32,
+        aspect_ratio: f32,
+        world_from_camera: Transform,
+    ) -> Self {
+        Self::perspective(
+            distance_for_fov(vertical_fov_deg),
+            aspect_ratio,
+            world_from_camera,
+        )
     }
 
     /// The ray through the screen point (u, v) ∈ [0,1]²: u = 0 is the left edge, v = 0 the bottom.
@@ -67,7 +75,10 @@ impl Camera {
         let sz = 2.0 * v - 1.0;
         let (o, d) = match self.projection {
             Projection::Orthogonal => (Point3::new(-1.0, sy, sz), Vec3::X),
-            Projection::Perspective { distance } => (Point3::new(-distance, 0.0, 0.0), Vec3::new(distance, sy, sz)),
+            Projection::Perspective { distance } => (
+                Point3::new(-distance, 0.0, 0.0),
+                Vec3::new(distance, sy, sz),
+            ),
         };
         let t = &self.world_from_camera;
         Ray::new(t.point(o), t.vector(d).normalize())
@@ -113,7 +124,10 @@ mod tests {
 
     #[test]
     fn cameras_follow_their_transformation() {
-        let c = Camera::orthogonal(1.0, Transform::translation(Vec3::new(0.0, -2.0, 0.0)) * Transform::rotation_z(90.0));
+        let c = Camera::orthogonal(
+            1.0,
+            Transform::translation(Vec3::new(0.0, -2.0, 0.0)) * Transform::rotation_z(90.0),
+        );
         let r = c.ray(0.5, 0.5);
         assert!(r.o.approx_eq(Point3::new(0.0, -3.0, 0.0), 1e-6));
         assert!(r.d.approx_eq(Vec3::Y, 1e-6));

@@ -22,7 +22,11 @@ impl Image {
 
     /// Builds from pixels in row-major order, top row first; `None` if the count is wrong.
     pub fn from_pixels(width: usize, height: usize, pixels: Vec<Rgb>) -> Option<Self> {
-        (width.checked_mul(height) == Some(pixels.len())).then_some(Self { width, height, pixels })
+        (width.checked_mul(height) == Some(pixels.len())).then_some(Self {
+            width,
+            height,
+            pixels,
+        })
     }
 
     /// Width in pixels.
@@ -58,14 +62,24 @@ impl Image {
     /// The pixel at column `x`, row `y` (row 0 at the top). Panics outside the image.
     #[inline]
     pub fn get(&self, x: usize, y: usize) -> Rgb {
-        assert!(self.valid(x, y), "pixel ({x}, {y}) outside a {}×{} image", self.width, self.height);
+        assert!(
+            self.valid(x, y),
+            "pixel ({x}, {y}) outside a {}×{} image",
+            self.width,
+            self.height
+        );
         self.pixels[y * self.width + x]
     }
 
     /// Sets the pixel at column `x`, row `y`. Panics outside the image.
     #[inline]
     pub fn set(&mut self, x: usize, y: usize, c: Rgb) {
-        assert!(self.valid(x, y), "pixel ({x}, {y}) outside a {}×{} image", self.width, self.height);
+        assert!(
+            self.valid(x, y),
+            "pixel ({x}, {y}) outside a {}×{} image",
+            self.width,
+            self.height
+        );
         self.pixels[y * self.width + x] = c;
     }
 

@@ -101,7 +101,8 @@ fn render_pixel(
     stats: &mut RayStats,
 ) -> Rgb {
     let (w, h) = (settings.width as f32, settings.height as f32);
-    let mut sampler = Sampler::for_pixel(settings.seed, (y * settings.width + x) as u64, settings.spp);
+    let mut sampler =
+        Sampler::for_pixel(settings.seed, (y * settings.width + x) as u64, settings.spp);
     let mut sum = [0f64; 3];
     for i in 0..settings.spp {
         let [sx, sy] = sampler.pixel_sample(i);
@@ -119,7 +120,11 @@ fn render_pixel(
         }
     }
     let n = settings.spp as f64;
-    Rgb::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
+    Rgb::new(
+        (sum[0] / n) as f32,
+        (sum[1] / n) as f32,
+        (sum[2] / n) as f32,
+    )
 }
 
 #[cfg(test)]
@@ -155,7 +160,13 @@ mod tests {
     fn scene() -> Scene {
         let mut b = SceneBuilder::new();
         let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(4.0, 0.0, 0.0)))), m, None);
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                4.0, 0.0, 0.0,
+            )))),
+            m,
+            None,
+        );
         b.build(AccelKind::None)
     }
 
@@ -169,14 +180,25 @@ mod tests {
             seed: 9,
         };
         let run = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
             pool.install(|| render(&s, &Noise, &settings, &|_| {}))
         };
         let a = run(1);
         let b = run(4);
         assert_eq!(a.image, b.image);
         assert_eq!(a.stats, b.stats);
-        let other = render(&s, &Noise, &RenderSettings { seed: 10, ..settings }, &|_| {});
+        let other = render(
+            &s,
+            &Noise,
+            &RenderSettings {
+                seed: 10,
+                ..settings
+            },
+            &|_| {},
+        );
         assert_ne!(a.image, other.image);
     }
 

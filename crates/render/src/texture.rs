@@ -85,7 +85,8 @@ impl ImageTexture {
                 let py = |j: i64| index(j, h, self.wrap[1]);
                 let img = &self.image;
                 let a = img.get(px(x0), py(y0)) * (1.0 - fx) + img.get(px(x0 + 1), py(y0)) * fx;
-                let b = img.get(px(x0), py(y0 + 1)) * (1.0 - fx) + img.get(px(x0 + 1), py(y0 + 1)) * fx;
+                let b =
+                    img.get(px(x0), py(y0 + 1)) * (1.0 - fx) + img.get(px(x0 + 1), py(y0 + 1)) * fx;
                 a * (1.0 - fy) + b * fy
             }
         }
@@ -147,7 +148,11 @@ impl Texture {
         match self {
             Texture::Uniform(c) => c.max_component(),
             Texture::Checkered { c1, c2, .. } => c1.max_component().max(c2.max_component()),
-            Texture::Image(t) => t.image.pixels().iter().fold(0.0, |m, p| m.max(p.max_component())),
+            Texture::Image(t) => t
+                .image
+                .pixels()
+                .iter()
+                .fold(0.0, |m, p| m.max(p.max_component())),
         }
     }
 }

@@ -38,7 +38,11 @@ fn closed_sphere_furnace_gives_le_over_one_minus_rho() {
             radiance: Texture::Uniform(Rgb::splat(le)),
             two_sided: true,
         });
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::scaling(Vec3::new(3.0, 3.0, 3.0)))), m, Some(e));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::scaling(Vec3::new(3.0, 3.0, 3.0)))),
+            m,
+            Some(e),
+        );
         b.camera(Camera::perspective(1.0, 4.0 / 3.0, Transform::IDENTITY));
         let scene = b.build(AccelKind::Bvh);
         let path = Path {
@@ -49,7 +53,10 @@ fn closed_sphere_furnace_gives_le_over_one_minus_rho() {
         let img = image(&scene, &path, 4);
         let expected = le / (1.0 - rho);
         for p in img.pixels() {
-            assert!((p.r - expected).abs() <= 1e-3 * expected.max(1.0), "Le {le}, ρ {rho}: {p:?} vs {expected}");
+            assert!(
+                (p.r - expected).abs() <= 1e-3 * expected.max(1.0),
+                "Le {le}, ρ {rho}: {p:?} vs {expected}"
+            );
         }
     }
 }
@@ -75,8 +82,18 @@ fn furnace_with_roulette_is_unbiased() {
 #[test]
 fn lossless_materials_vanish_in_a_white_furnace() {
     let models = [
-        ("white diffuse", Model::Diffuse { reflectance: Texture::Uniform(Rgb::WHITE) }),
-        ("white mirror", Model::Specular { reflectance: Texture::Uniform(Rgb::WHITE) }),
+        (
+            "white diffuse",
+            Model::Diffuse {
+                reflectance: Texture::Uniform(Rgb::WHITE),
+            },
+        ),
+        (
+            "white mirror",
+            Model::Specular {
+                reflectance: Texture::Uniform(Rgb::WHITE),
+            },
+        ),
         (
             "clear glass",
             Model::Dielectric {
@@ -98,8 +115,17 @@ fn lossless_materials_vanish_in_a_white_furnace() {
     for (name, model) in models {
         let mut b = SceneBuilder::new();
         let m = b.add_material(Material::two_sided(model));
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(4.0, 0.0, 0.0)))), m, None);
-        b.add_light(Light::Environment(Environment::new(Texture::Uniform(Rgb::WHITE), Transform::IDENTITY)));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                4.0, 0.0, 0.0,
+            )))),
+            m,
+            None,
+        );
+        b.add_light(Light::Environment(Environment::new(
+            Texture::Uniform(Rgb::WHITE),
+            Transform::IDENTITY,
+        )));
         b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
         let scene = b.build(AccelKind::Bvh);
         let path = Path {
@@ -131,15 +157,39 @@ fn glossy_models_conserve_energy_in_a_white_furnace() {
     let kd = Texture::Uniform(Rgb::splat(0.5));
     let ks = Texture::Uniform(Rgb::splat(0.5));
     let models = [
-        Model::Phong { lobe: Lobe::Phong, kd: kd.clone(), ks: ks.clone(), n: 20.0 },
-        Model::Phong { lobe: Lobe::BlinnPhong, kd: kd.clone(), ks: ks.clone(), n: 20.0 },
-        Model::CookTorrance { kd: kd.clone(), ks: ks.clone(), mf: Microfacet::new(Distribution::Ggx, 0.3), ior: 1.5 },
+        Model::Phong {
+            lobe: Lobe::Phong,
+            kd: kd.clone(),
+            ks: ks.clone(),
+            n: 20.0,
+        },
+        Model::Phong {
+            lobe: Lobe::BlinnPhong,
+            kd: kd.clone(),
+            ks: ks.clone(),
+            n: 20.0,
+        },
+        Model::CookTorrance {
+            kd: kd.clone(),
+            ks: ks.clone(),
+            mf: Microfacet::new(Distribution::Ggx, 0.3),
+            ior: 1.5,
+        },
     ];
     for model in models {
         let mut b = SceneBuilder::new();
         let m = b.add_material(Material::two_sided(model.clone()));
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(4.0, 0.0, 0.0)))), m, None);
-        b.add_light(Light::Environment(Environment::new(Texture::Uniform(Rgb::WHITE), Transform::IDENTITY)));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                4.0, 0.0, 0.0,
+            )))),
+            m,
+            None,
+        );
+        b.add_light(Light::Environment(Environment::new(
+            Texture::Uniform(Rgb::WHITE),
+            Transform::IDENTITY,
+        )));
         b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
         let scene = b.build(AccelKind::Bvh);
         let img = image(&scene, &Path::default(), 64);

@@ -13,7 +13,9 @@ use candela_render::{Rgb, SceneBuilder};
 
 /// Each shape with the smallest radius of curvature of its curved parts (0 for flat faces).
 fn shapes() -> Vec<(&'static str, Shape, f32)> {
-    let t = Transform::translation(Vec3::new(3.0, -20.0, 7.0)) * Transform::rotation_x(33.0) * Transform::rotation_z(17.0);
+    let t = Transform::translation(Vec3::new(3.0, -20.0, 7.0))
+        * Transform::rotation_x(33.0)
+        * Transform::rotation_z(17.0);
     let tet = [
         (Vec3::new(-1.0, 0.0, 0.0), 0.0),
         (Vec3::new(0.0, -1.0, 0.0), 0.0),
@@ -21,14 +23,45 @@ fn shapes() -> Vec<(&'static str, Shape, f32)> {
         (Vec3::new(1.0, 1.0, 1.0), 2.0),
     ];
     vec![
-        ("sphere", Shape::Sphere(Sphere::new(t * Transform::scaling(Vec3::new(2.0, 0.5, 1.0)))), 0.125),
-        ("small sphere", Shape::Sphere(Sphere::new(Transform::scaling(Vec3::new(0.01, 0.01, 0.01)))), 0.01),
-        ("big sphere", Shape::Sphere(Sphere::new(t * Transform::scaling(Vec3::new(300.0, 300.0, 300.0)))), 300.0),
-        ("cube", Shape::Cube(Cube::new(t * Transform::scaling(Vec3::new(1.0, 3.0, 0.2)))), 0.0),
-        ("polyhedron", Shape::Polyhedron(Polyhedron::new(t, &tet).unwrap()), 0.0),
+        (
+            "sphere",
+            Shape::Sphere(Sphere::new(
+                t * Transform::scaling(Vec3::new(2.0, 0.5, 1.0)),
+            )),
+            0.125,
+        ),
+        (
+            "small sphere",
+            Shape::Sphere(Sphere::new(Transform::scaling(Vec3::new(0.01, 0.01, 0.01)))),
+            0.01,
+        ),
+        (
+            "big sphere",
+            Shape::Sphere(Sphere::new(
+                t * Transform::scaling(Vec3::new(300.0, 300.0, 300.0)),
+            )),
+            300.0,
+        ),
+        (
+            "cube",
+            Shape::Cube(Cube::new(t * Transform::scaling(Vec3::new(1.0, 3.0, 0.2)))),
+            0.0,
+        ),
+        (
+            "polyhedron",
+            Shape::Polyhedron(Polyhedron::new(t, &tet).unwrap()),
+            0.0,
+        ),
         (
             "parallelogram",
-            Shape::Parallelogram(Parallelogram::new(Point3::new(100.0, 3.0, -2.0), Vec3::new(3.0, 1.0, 0.0), Vec3::new(0.0, 1.0, 5.0)).unwrap()),
+            Shape::Parallelogram(
+                Parallelogram::new(
+                    Point3::new(100.0, 3.0, -2.0),
+                    Vec3::new(3.0, 1.0, 0.0),
+                    Vec3::new(0.0, 1.0, 5.0),
+                )
+                .unwrap(),
+            ),
             0.0,
         ),
         ("disk", Shape::Disk(Disk::new(t)), 0.0),
@@ -47,7 +80,10 @@ fn spawned_rays_never_rehit_their_surface() {
     for (name, shape, curvature_radius) in shapes() {
         let mut b = SceneBuilder::new();
         let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
-        let centre = shape.bounds().map(|b| b.centroid()).unwrap_or(Point3::new(3.0, -20.0, 7.0));
+        let centre = shape
+            .bounds()
+            .map(|b| b.centroid())
+            .unwrap_or(Point3::new(3.0, -20.0, 7.0));
         let radius = shape.bounds().map(|b| b.diagonal().norm()).unwrap_or(10.0);
         b.add_shape(shape, m, None);
         let scene = b.build(AccelKind::Bvh);
@@ -56,7 +92,9 @@ fn spawned_rays_never_rehit_their_surface() {
             let o = centre + common::direction(&mut rng) * (radius * 2.0);
             let target = centre + common::point(&mut rng, radius * 0.3).to_vec();
             let first_ray = Ray::new(o, target - o);
-            let Some(first) = scene.intersect(&first_ray, &mut st) else { continue };
+            let Some(first) = scene.intersect(&first_ray, &mut st) else {
+                continue;
+            };
             let si = scene.geometry.interaction(&first_ray, &first);
             points += 1;
             for _ in 0..4 {
@@ -67,11 +105,17 @@ fn spawned_rays_never_rehit_their_surface() {
                     None => {}
                     Some(h) => {
                         let flat = matches!(name, "parallelogram" | "disk" | "plane");
-                        assert!(!outward && !flat, "{name}: a ray leaving {:?} along {d:?} re-hit at t = {}", si.p, h.t);
+                        assert!(
+                            !outward && !flat,
+                            "{name}: a ray leaving {:?} along {d:?} re-hit at t = {}",
+                            si.p,
+                            h.t
+                        );
                         let cos = si.n.dot_vec(d).abs();
                         let same_face = h.sub == first.sub;
                         assert!(
-                            !same_face || (curvature_radius > 0.0 && h.t > 0.1 * curvature_radius * cos),
+                            !same_face
+                                || (curvature_radius > 0.0 && h.t > 0.1 * curvature_radius * cos),
                             "{name}: an inward ray from {:?} along {d:?} re-hit its face at t = {}",
                             si.p,
                             h.t
@@ -108,7 +152,10 @@ fn closed_meshes_are_watertight() {
             }
             _ => common::direction(&mut rng),
         };
-        assert!(scene.intersect(&Ray::new(o, d), &mut st).is_some(), "ray {i} from {o:?} along {d:?} escaped");
+        assert!(
+            scene.intersect(&Ray::new(o, d), &mut st).is_some(),
+            "ray {i} from {o:?} along {d:?} escaped"
+        );
     }
 }
 

@@ -203,7 +203,9 @@ impl Builder<'_> {
         let here = |pos: Pos| format!("{}:{pos}", self.desc.source.path.display());
         for l in &self.desc.lights {
             if l.components.is_some() {
-                self.report.local_model_terms.push(format!("{}: components(…)", here(l.pos)));
+                self.report
+                    .local_model_terms
+                    .push(format!("{}: components(…)", here(l.pos)));
             }
             let c = l.local_components();
             let components = Components {
@@ -281,7 +283,9 @@ impl Builder<'_> {
             self.scene.add_light(light);
         }
         for a in &self.desc.ambient_lights {
-            self.report.local_model_terms.push(format!("{}: ambient_light", here(a.pos)));
+            self.report
+                .local_model_terms
+                .push(format!("{}: ambient_light", here(a.pos)));
             self.scene.add_ambient(a.intensity);
         }
         for e in &self.desc.environments {

@@ -10,7 +10,7 @@ use candela_render::math::{Point3, Ray, Vec3};
 use candela_render::render::{render, RenderSettings};
 use candela_render::shape::Shape;
 use candela_render::stats::RayStats;
-use candela_render::texture::{Filter, Texture, ImageTexture};
+use candela_render::texture::{Filter, ImageTexture, Texture};
 use candela_render::{Image, Rgb};
 use candela_scene::mitsuba::load_mitsuba;
 use candela_scene::{LoadOptions, LoadedScene, SceneError};

@@ -74,12 +74,20 @@ mod tests {
 
     fn one_sphere() -> Scene {
         let mut b = SceneBuilder::new();
-        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::new(0.5, 0.25, 0.0))));
+        let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::new(
+            0.5, 0.25, 0.0,
+        ))));
         let e = b.add_emission(Emission {
             radiance: Texture::Uniform(Rgb::new(0.0, 0.0, 1.0)),
             two_sided: true,
         });
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(3.0, 0.0, 0.0)))), m, Some(e));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                3.0, 0.0, 0.0,
+            )))),
+            m,
+            Some(e),
+        );
         b.build(AccelKind::None)
     }
 
@@ -92,13 +100,22 @@ mod tests {
         let miss = Ray::new(Point3::ORIGIN, Vec3::Y);
         assert_eq!(OnOff.radiance(&s, &hit, &mut sm, &mut st), Rgb::WHITE);
         assert_eq!(OnOff.radiance(&s, &miss, &mut sm, &mut st), Rgb::BLACK);
-        assert_eq!(Flat.radiance(&s, &hit, &mut sm, &mut st), Rgb::new(0.5, 0.25, 1.0));
-        assert_eq!(Normals.radiance(&s, &hit, &mut sm, &mut st), Rgb::new(0.0, 0.5, 0.5));
+        assert_eq!(
+            Flat.radiance(&s, &hit, &mut sm, &mut st),
+            Rgb::new(0.5, 0.25, 1.0)
+        );
+        assert_eq!(
+            Normals.radiance(&s, &hit, &mut sm, &mut st),
+            Rgb::new(0.0, 0.5, 0.5)
+        );
         assert_eq!(Normals.radiance(&s, &miss, &mut sm, &mut st), Rgb::BLACK);
         assert_eq!(Depth.radiance(&s, &hit, &mut sm, &mut st), Rgb::splat(2.0));
         assert_eq!(Depth.radiance(&s, &miss, &mut sm, &mut st), Rgb::BLACK);
         // From inside the sphere the normal still faces the ray.
         let inside = Ray::new(Point3::new(3.0, 0.0, 0.0), Vec3::Z);
-        assert_eq!(Normals.radiance(&s, &inside, &mut sm, &mut st), Rgb::new(0.5, 0.5, 0.0));
+        assert_eq!(
+            Normals.radiance(&s, &inside, &mut sm, &mut st),
+            Rgb::new(0.5, 0.5, 0.0)
+        );
     }
 }

@@ -30,7 +30,13 @@ pub struct Local;
 pub struct Direct;
 
 impl Integrator for Local {
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         match scene.interact(ray, stats) {
             Some(si) => shade(scene, &si, false, sampler, stats),
             None => scene.escaped(ray.d.normalize()),
@@ -39,7 +45,13 @@ impl Integrator for Local {
 }
 
 impl Integrator for Direct {
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         match scene.interact(ray, stats) {
             Some(si) => shade(scene, &si, true, sampler, stats),
             None => scene.escaped(ray.d.normalize()),
@@ -48,7 +60,13 @@ impl Integrator for Direct {
 }
 
 /// True when the light's target is hidden from the surface point.
-pub(crate) fn shadowed(scene: &Scene, si: &SurfaceInteraction, wi: Vec3, target: Target, stats: &mut RayStats) -> bool {
+pub(crate) fn shadowed(
+    scene: &Scene,
+    si: &SurfaceInteraction,
+    wi: Vec3,
+    target: Target,
+    stats: &mut RayStats,
+) -> bool {
     let ray = match target {
         Target::Point(p) => si.spawn_ray_to(p),
         Target::Surface(p, n) => Ray::spawn_between(si.p, si.n, p, n),
@@ -58,7 +76,13 @@ pub(crate) fn shadowed(scene: &Scene, si: &SurfaceInteraction, wi: Vec3, target:
 }
 
 /// The local model at a surface point, with or without shadow rays.
-pub fn shade(scene: &Scene, si: &SurfaceInteraction, shadows: bool, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+pub fn shade(
+    scene: &Scene,
+    si: &SurfaceInteraction,
+    shadows: bool,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) -> Rgb {
     let m = scene.material(si);
     let n = si.facing_shading_normal();
     let ka = m.ambient(si.uv);
@@ -66,9 +90,13 @@ pub fn shade(scene: &Scene, si: &SurfaceInteraction, shadows: bool, sampler: &mu
     for light in &scene.lights {
         match light {
             Light::Point(..) | Light::Spot(..) | Light::Distant(..) => {
-                let Some(li) = light.local(si.p) else { continue };
+                let Some(li) = light.local(si.p) else {
+                    continue;
+                };
                 l += li.ambient * ka;
-                if n.dot_vec(li.wi) <= 0.0 || (shadows && shadowed(scene, si, li.wi, li.target, stats)) {
+                if n.dot_vec(li.wi) <= 0.0
+                    || (shadows && shadowed(scene, si, li.wi, li.target, stats))
+                {
                     continue;
                 }
                 l += m.local(si.uv, n, si.wo, li.wi, li.diffuse, li.specular);
@@ -80,9 +108,16 @@ pub fn shade(scene: &Scene, si: &SurfaceInteraction, shadows: bool, sampler: &mu
                 let pattern = sampler.next_index(u32::MAX);
                 let mut sum = Rgb::BLACK;
                 for i in 0..HEMISPHERE_SAMPLES {
-                    let wi = frame.to_world(warp::square_to_cosine_hemisphere(cmj(i, HEMISPHERE_SAMPLES, pattern)));
+                    let wi = frame.to_world(warp::square_to_cosine_hemisphere(cmj(
+                        i,
+                        HEMISPHERE_SAMPLES,
+                        pattern,
+                    )));
                     let cos = n.dot_vec(wi);
-                    if cos <= 0.0 || wi.dot(h.up) <= 0.0 || (shadows && shadowed(scene, si, wi, Target::Infinite, stats)) {
+                    if cos <= 0.0
+                        || wi.dot(h.up) <= 0.0
+                        || (shadows && shadowed(scene, si, wi, Target::Infinite, stats))
+                    {
                         continue;
                     }
                     sum += m.local(si.uv, n, si.wo, wi, c.diffuse, c.specular) * (PI / cos);
@@ -134,7 +169,11 @@ mod tests {
         let mut st = RayStats::default();
         let mut sm = Sampler::new(0, 0);
         let l = Direct.radiance(&scene, &ray, &mut sm, &mut st);
-        let expected = Rgb::new(std::f32::consts::FRAC_1_PI * std::f32::consts::FRAC_1_SQRT_2, 0.0, 1.0);
+        let expected = Rgb::new(
+            std::f32::consts::FRAC_1_PI * std::f32::consts::FRAC_1_SQRT_2,
+            0.0,
+            1.0,
+        );
         assert!(l.approx_eq(expected, 1e-6), "{l:?}");
         assert!((l.r - 0.22507908).abs() < 1e-6);
     }
@@ -145,7 +184,14 @@ mod tests {
         let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
         b.add_shape(Shape::Sphere(Sphere::new(Transform::IDENTITY)), m, None);
         // A blocker between the light and the hit point (-1, 0, 0).
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(-3.0, 0.0, 0.0)) * Transform::scaling(Vec3::new(0.2, 0.2, 0.2)))), m, None);
+        b.add_shape(
+            Shape::Sphere(Sphere::new(
+                Transform::translation(Vec3::new(-3.0, 0.0, 0.0))
+                    * Transform::scaling(Vec3::new(0.2, 0.2, 0.2)),
+            )),
+            m,
+            None,
+        );
         b.add_light(Light::Point(
             PointLight {
                 position: Point3::new(-5.0, 0.0, 0.0),
@@ -155,7 +201,10 @@ mod tests {
             Components::from_intensity(Rgb::WHITE),
         ));
         let scene = b.build(AccelKind::Bvh);
-        let ray = Ray::new(Point3::new(-1.5, 0.0, 5.0), Point3::new(-1.0, 0.0, 0.0) - Point3::new(-1.5, 0.0, 5.0));
+        let ray = Ray::new(
+            Point3::new(-1.5, 0.0, 5.0),
+            Point3::new(-1.0, 0.0, 0.0) - Point3::new(-1.5, 0.0, 5.0),
+        );
         let mut st = RayStats::default();
         let mut sm = Sampler::new(0, 0);
         let lit = Local.radiance(&scene, &ray, &mut sm, &mut st);

@@ -40,9 +40,19 @@ impl Default for Path {
 }
 
 impl Integrator for Path {
-    fn radiance(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         let max_depth = self.max_depth.unwrap_or(u32::MAX);
-        let light_pick = if scene.lights.is_empty() { 0.0 } else { 1.0 / scene.lights.len() as f32 };
+        let light_pick = if scene.lights.is_empty() {
+            0.0
+        } else {
+            1.0 / scene.lights.len() as f32
+        };
         let mut l = Rgb::BLACK;
         let mut beta = Rgb::WHITE;
         let mut ray = *camera_ray;
@@ -64,7 +74,11 @@ impl Integrator for Path {
                         if le.is_black() {
                             continue;
                         }
-                        let w = if prev_delta { 1.0 } else { power_heuristic(1.0, prev_pdf, 1.0, light_pick * light.pdf_escape(d)) };
+                        let w = if prev_delta {
+                            1.0
+                        } else {
+                            power_heuristic(1.0, prev_pdf, 1.0, light_pick * light.pdf_escape(d))
+                        };
                         l += beta * le * w;
                     }
                 }
@@ -77,7 +91,8 @@ impl Integrator for Path {
                 if !le.is_black() {
                     let w = match si.props.light {
                         Some(li) if !prev_delta => {
-                            let pdf_light = light_pick * scene.lights[li as usize].pdf_hit(prev_p, si.p, si.n);
+                            let pdf_light =
+                                light_pick * scene.lights[li as usize].pdf_hit(prev_p, si.p, si.n);
                             power_heuristic(1.0, prev_pdf, 1.0, pdf_light)
                         }
                         _ => 1.0,
@@ -99,9 +114,14 @@ impl Integrator for Path {
                 let light = &scene.lights[pick as usize];
                 if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u) {
                     let f = bsdf.eval(wo, ls.wi);
-                    if !f.is_black() && !super::local::shadowed(scene, &si, ls.wi, ls.target, stats) {
+                    if !f.is_black() && !super::local::shadowed(scene, &si, ls.wi, ls.target, stats)
+                    {
                         let pdf_light = light_pick * ls.pdf;
-                        let w = if ls.delta { 1.0 } else { power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf(wo, ls.wi)) };
+                        let w = if ls.delta {
+                            1.0
+                        } else {
+                            power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf(wo, ls.wi))
+                        };
                         l += beta * f * ls.li * (w / pdf_light);
                     }
                 }
@@ -114,7 +134,9 @@ impl Integrator for Path {
             // BSDF sampling continues the path.
             let u1 = sampler.next_1d();
             let u2 = sampler.next_2d();
-            let Some(bs) = bsdf.sample(wo, u1, u2) else { break };
+            let Some(bs) = bsdf.sample(wo, u1, u2) else {
+                break;
+            };
             beta *= bs.weight;
             if beta.is_black() {
                 break;
@@ -151,13 +173,26 @@ pub struct CoursePath {
 }
 
 impl Integrator for CoursePath {
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         self.trace(scene, ray, 0, sampler, stats)
     }
 }
 
 impl CoursePath {
-    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn trace(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        depth: u32,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         if self.max_depth.is_some_and(|m| depth > m) {
             return Rgb::BLACK;
         }
@@ -183,7 +218,8 @@ impl CoursePath {
             let u1 = sampler.next_1d();
             let u2 = sampler.next_2d();
             if let Some(bs) = bsdf.sample(si.wo, u1, u2) {
-                sum += bs.weight * self.trace(scene, &si.spawn_ray(bs.wi), depth + 1, sampler, stats);
+                sum +=
+                    bs.weight * self.trace(scene, &si.spawn_ray(bs.wi), depth + 1, sampler, stats);
             }
         }
         emitted + sum * (scale / self.num_of_rays as f32)

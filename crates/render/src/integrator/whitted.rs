@@ -20,13 +20,26 @@ pub struct Whitted {
 }
 
 impl Integrator for Whitted {
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         self.trace(scene, ray, 0, sampler, stats)
     }
 }
 
 impl Whitted {
-    fn trace(&self, scene: &Scene, ray: &Ray, depth: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn trace(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        depth: u32,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         let Some(si) = scene.interact(ray, stats) else {
             return scene.escaped(ray.d.normalize());
         };
@@ -83,15 +96,28 @@ mod tests {
             radiance: Texture::Uniform(Rgb::WHITE),
             two_sided: true,
         });
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::IDENTITY)), mirror, None);
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(-10.0, 0.0, 0.0)))), black, Some(e));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::IDENTITY)),
+            mirror,
+            None,
+        );
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                -10.0, 0.0, 0.0,
+            )))),
+            black,
+            Some(e),
+        );
         let scene = b.build(AccelKind::Bvh);
         let w = Whitted { max_depth: 10 };
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
         let l = w.radiance(&scene, &ray, &mut Sampler::new(0, 0), &mut st);
         assert!(l.approx_eq(Rgb::splat(0.5), 1e-6), "{l:?}");
-        assert_eq!(Whitted { max_depth: 0 }.radiance(&scene, &ray, &mut Sampler::new(0, 0), &mut st), Rgb::BLACK);
+        assert_eq!(
+            Whitted { max_depth: 0 }.radiance(&scene, &ray, &mut Sampler::new(0, 0), &mut st),
+            Rgb::BLACK
+        );
     }
 
     /// A glass slab seen head-on in front of an emitter: the transmitted weight is
@@ -112,11 +138,19 @@ mod tests {
             two_sided: true,
         });
         b.add_shape(
-            Shape::Cube(crate::shape::Cube::new(Transform::scaling(Vec3::new(0.1, 5.0, 5.0)))),
+            Shape::Cube(crate::shape::Cube::new(Transform::scaling(Vec3::new(
+                0.1, 5.0, 5.0,
+            )))),
             glass,
             None,
         );
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(10.0, 0.0, 0.0)))), black, Some(e));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                10.0, 0.0, 0.0,
+            )))),
+            black,
+            Some(e),
+        );
         let scene = b.build(AccelKind::Bvh);
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();

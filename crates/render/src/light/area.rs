@@ -60,7 +60,11 @@ impl AreaLight {
         let m = &sphere.world_from_object;
         let (c0, c1, c2) = (m.vector(Vec3::X), m.vector(Vec3::Y), m.vector(Vec3::Z));
         let r = c0.norm();
-        let similar = (c1.norm() - r).abs() < 1e-4 * r && (c2.norm() - r).abs() < 1e-4 * r && c0.dot(c1).abs() < 1e-4 * r * r && c1.dot(c2).abs() < 1e-4 * r * r && c0.dot(c2).abs() < 1e-4 * r * r;
+        let similar = (c1.norm() - r).abs() < 1e-4 * r
+            && (c2.norm() - r).abs() < 1e-4 * r
+            && c0.dot(c1).abs() < 1e-4 * r * r
+            && c1.dot(c2).abs() < 1e-4 * r * r
+            && c0.dot(c2).abs() < 1e-4 * r * r;
         let cone = similar.then(|| (m.point(Point3::ORIGIN), r));
         let area = match cone {
             Some((_, r)) => 4.0 * PI * r * r,
@@ -137,7 +141,10 @@ impl AreaLight {
             }
             AreaShape::Cube { cube, faces } => {
                 let (face, u0) = faces.sample_discrete(u[0]);
-                cube.surface(face as u32, Cube::face_point(face as u32, 2.0 * u0 - 1.0, 2.0 * u[1] - 1.0))
+                cube.surface(
+                    face as u32,
+                    Cube::face_point(face as u32, 2.0 * u0 - 1.0, 2.0 * u[1] - 1.0),
+                )
             }
             AreaShape::Mesh { mesh, triangles } => {
                 let (tri, u0) = triangles.sample_discrete(u[0]);
@@ -151,7 +158,10 @@ impl AreaLight {
     /// The area density of uniform-sphere sampling mapped through an arbitrary placement: the
     /// object-space density 1/(4π) divided by the area scale |det M|·|M⁻ᵀ q| at q.
     fn sphere_area_pdf(&self, sphere: &Sphere, q: Vec3) -> f32 {
-        if let AreaShape::Sphere { cone: Some((_, r)), .. } = &self.shape {
+        if let AreaShape::Sphere {
+            cone: Some((_, r)), ..
+        } = &self.shape
+        {
             return 1.0 / (4.0 * PI * r * r);
         }
         let t = &sphere.world_from_object;
@@ -163,9 +173,19 @@ impl AreaLight {
 
     /// Samples a point of the light seen from `p`: the direction, emitted radiance towards `p`,
     /// and the density per unit solid angle.
-    pub fn sample(&self, geometry: &Geometry, emissions: &[Emission], p: Point3, u: [f32; 2]) -> Option<LightSample> {
+    pub fn sample(
+        &self,
+        geometry: &Geometry,
+        emissions: &[Emission],
+        p: Point3,
+        u: [f32; 2],
+    ) -> Option<LightSample> {
         let emission = &emissions[self.emission as usize];
-        if let AreaShape::Sphere { sphere, cone: Some((c, r)) } = &self.shape {
+        if let AreaShape::Sphere {
+            sphere,
+            cone: Some((c, r)),
+        } = &self.shape
+        {
             let d2 = p.squared_distance(*c);
             if d2 > r * r * 1.0001 {
                 // Sample the cone of directions the sphere subtends (1 − cos θ_max from
@@ -173,7 +193,9 @@ impl AreaLight {
                 let one_minus_cos = warp::one_minus_cos_from_sin2(r * r / d2);
                 let axis = (*c - p) / d2.sqrt();
                 let frame = crate::math::Frame::from_normal(axis.to_normal());
-                let wi = frame.to_world(warp::square_to_uniform_cone_narrow(u, one_minus_cos)).normalize();
+                let wi = frame
+                    .to_world(warp::square_to_uniform_cone_narrow(u, one_minus_cos))
+                    .normalize();
                 let ray = crate::math::Ray::new(p, wi);
                 let t = match sphere.crossings(&ray) {
                     Some((t0, _)) if t0 > 0.0 => t0,
@@ -220,7 +242,9 @@ impl AreaLight {
                 if let Some((c, r)) = cone {
                     let d2 = p.squared_distance(*c);
                     if d2 > r * r * 1.0001 {
-                        return warp::uniform_cone_pdf_narrow(warp::one_minus_cos_from_sin2(r * r / d2));
+                        return warp::uniform_cone_pdf_narrow(warp::one_minus_cos_from_sin2(
+                            r * r / d2,
+                        ));
                     }
                 }
                 let ql = sphere.world_from_object.inv_point(q).to_vec();

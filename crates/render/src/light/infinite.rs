@@ -36,7 +36,8 @@ impl Environment {
                 for y in 0..h {
                     let sin = (PI * (y as f32 + 0.5) / h as f32).sin();
                     for x in 0..w {
-                        let uv = Point2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                        let uv =
+                            Point2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
                         f.push(radiance.eval(uv).luminance().max(0.0) * sin);
                     }
                 }
@@ -59,7 +60,10 @@ impl Environment {
         if phi < 0.0 {
             phi += 2.0 * PI;
         }
-        Point2::new((phi * INV_2PI).min(crate::sampling::sampler::ONE_MINUS_EPSILON), crate::math::safe_acos(l.z) * INV_PI)
+        Point2::new(
+            (phi * INV_2PI).min(crate::sampling::sampler::ONE_MINUS_EPSILON),
+            crate::math::safe_acos(l.z) * INV_PI,
+        )
     }
 
     /// The world direction of lat-long coordinates.
@@ -91,7 +95,10 @@ impl Environment {
                 Some((d, self.radiance(d), pdf))
             }
             None => {
-                let d = self.world_from_env.vector(warp::square_to_uniform_sphere(u)).normalize();
+                let d = self
+                    .world_from_env
+                    .vector(warp::square_to_uniform_sphere(u))
+                    .normalize();
                 Some((d, self.radiance(d), warp::uniform_sphere_pdf()))
             }
         }
@@ -136,7 +143,10 @@ impl HemisphereLight {
     /// A direction uniform over the lit hemisphere, with density 1/(2π).
     pub fn sample(&self, u: [f32; 2]) -> (Vec3, f32) {
         let l = warp::square_to_uniform_hemisphere(u);
-        (crate::math::Frame::from_normal(self.up.to_normal()).to_world(l), warp::uniform_hemisphere_pdf())
+        (
+            crate::math::Frame::from_normal(self.up.to_normal()).to_world(l),
+            warp::uniform_hemisphere_pdf(),
+        )
     }
 
     /// The density of [`HemisphereLight::sample`].
@@ -191,7 +201,11 @@ mod tests {
             let d = warp::square_to_uniform_sphere([rng.next_f32(), rng.next_f32()]);
             integral += e.pdf(d) as f64 / warp::uniform_sphere_pdf() as f64;
         }
-        assert!((integral / n as f64 - 1.0).abs() < 0.02, "{}", integral / n as f64);
+        assert!(
+            (integral / n as f64 - 1.0).abs() < 0.02,
+            "{}",
+            integral / n as f64
+        );
         for _ in 0..100 {
             let (d, _, pdf) = e.sample([rng.next_f32(), rng.next_f32()]).unwrap();
             assert!((pdf - e.pdf(d)).abs() < 1e-3 * pdf);

@@ -129,7 +129,12 @@ impl Light {
                 let to = l.position - p;
                 let d = to.norm();
                 let wi = to / d;
-                (wi, Target::Point(l.position), l.falloff.scale(d) * l.profile(-wi), c)
+                (
+                    wi,
+                    Target::Point(l.position),
+                    l.falloff.scale(d) * l.profile(-wi),
+                    c,
+                )
             }
             Light::Distant(l, c) => (-l.direction, Target::Infinite, 1.0, c),
             _ => return None,
@@ -144,7 +149,13 @@ impl Light {
     }
 
     /// Samples the light as seen from `p` for the path tracer.
-    pub fn sample(&self, geometry: &Geometry, emissions: &[Emission], p: Point3, u: [f32; 2]) -> Option<LightSample> {
+    pub fn sample(
+        &self,
+        geometry: &Geometry,
+        emissions: &[Emission],
+        p: Point3,
+        u: [f32; 2],
+    ) -> Option<LightSample> {
         let s = match self {
             Light::Point(l, _) => {
                 let to = l.position - p;

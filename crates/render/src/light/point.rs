@@ -32,7 +32,11 @@ impl Falloff {
     /// The scale at distance `d`.
     #[inline]
     pub fn scale(&self, d: f32) -> f32 {
-        let mut s = if self.radius > 0.0 { (self.radius / d) * (self.radius / d) } else { 1.0 };
+        let mut s = if self.radius > 0.0 {
+            (self.radius / d) * (self.radius / d)
+        } else {
+            1.0
+        };
         if let Some([c1, c2, c3]) = self.attenuation {
             let den = c1 + c2 * d + c3 * d * d;
             s *= if den > 1.0 { 1.0 / den } else { 1.0 };
@@ -93,7 +97,11 @@ impl SpotLight {
                 if c >= cos_beam {
                     1.0
                 } else {
-                    let (a, b, x) = (self.cos_cutoff.acos(), cos_beam.acos(), c.clamp(-1.0, 1.0).acos());
+                    let (a, b, x) = (
+                        self.cos_cutoff.acos(),
+                        cos_beam.acos(),
+                        c.clamp(-1.0, 1.0).acos(),
+                    );
                     ((a - x) / (a - b)).clamp(0.0, 1.0)
                 }
             }
@@ -107,7 +115,10 @@ mod tests {
 
     #[test]
     fn falloff_by_hand() {
-        let f = Falloff { radius: 2.0, attenuation: None };
+        let f = Falloff {
+            radius: 2.0,
+            attenuation: None,
+        };
         assert_eq!(f.scale(4.0), 0.25);
         assert_eq!(Falloff::default().scale(10.0), 1.0);
         let a = Falloff {

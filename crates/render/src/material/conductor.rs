@@ -53,7 +53,13 @@ pub fn eval(mf: &Microfacet, c: Option<(Rgb, Rgb)>, r: Rgb, wo: Vec3, wi: Vec3) 
 }
 
 /// Samples a microfacet normal and reflects about it.
-pub fn sample(mf: &Microfacet, c: Option<(Rgb, Rgb)>, r: Rgb, wo: Vec3, u: [f32; 2]) -> Option<LocalSample> {
+pub fn sample(
+    mf: &Microfacet,
+    c: Option<(Rgb, Rgb)>,
+    r: Rgb,
+    wo: Vec3,
+    u: [f32; 2],
+) -> Option<LocalSample> {
     if wo.z <= 0.0 {
         return None;
     }

@@ -70,7 +70,11 @@ impl CookTorrance {
         if wo.z <= 0.0 {
             return None;
         }
-        let wi = if u1 < self.specular_probability() { reflect(wo, self.mf.sample(wo, u2)) } else { square_to_cosine_hemisphere(u2) };
+        let wi = if u1 < self.specular_probability() {
+            reflect(wo, self.mf.sample(wo, u2))
+        } else {
+            square_to_cosine_hemisphere(u2)
+        };
         let pdf = self.pdf(wo, wi);
         if wi.z <= 0.0 || !(pdf > 0.0) {
             return None;

@@ -58,7 +58,9 @@ fn half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, bool, f32)> {
 
 /// f·|cos θi| of the rough interface.
 pub fn eval_rough(mf: &Microfacet, eta: f32, r: Rgb, t: Rgb, wo: Vec3, wi: Vec3) -> Rgb {
-    let Some((m, reflection, eta_p)) = half_vector(eta, wo, wi) else { return Rgb::BLACK };
+    let Some((m, reflection, eta_p)) = half_vector(eta, wo, wi) else {
+        return Rgb::BLACK;
+    };
     let d = mf.d(m);
     let (f, ..) = fresnel_dielectric(wo.dot(m), eta);
     let g = mf.g(wo, wi, m);
@@ -78,7 +80,9 @@ pub fn eval_rough(mf: &Microfacet, eta: f32, r: Rgb, t: Rgb, wo: Vec3, wi: Vec3)
 
 /// The density of [`sample_rough`].
 pub fn pdf_rough(mf: &Microfacet, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
-    let Some((m, reflection, eta_p)) = half_vector(eta, wo, wi) else { return 0.0 };
+    let Some((m, reflection, eta_p)) = half_vector(eta, wo, wi) else {
+        return 0.0;
+    };
     let (om, im) = (wo.dot(m), wi.dot(m));
     if om * wo.z <= 0.0 || im * wi.z <= 0.0 {
         return 0.0;
@@ -95,7 +99,15 @@ pub fn pdf_rough(mf: &Microfacet, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
 }
 
 /// Samples a microfacet normal, then reflection (probability F) or refraction through it.
-pub fn sample_rough(mf: &Microfacet, eta: f32, r: Rgb, t: Rgb, wo: Vec3, u1: f32, u2: [f32; 2]) -> Option<LocalSample> {
+pub fn sample_rough(
+    mf: &Microfacet,
+    eta: f32,
+    r: Rgb,
+    t: Rgb,
+    wo: Vec3,
+    u1: f32,
+    u2: [f32; 2],
+) -> Option<LocalSample> {
     if wo.z == 0.0 {
         return None;
     }
@@ -111,7 +123,11 @@ pub fn sample_rough(mf: &Microfacet, eta: f32, r: Rgb, t: Rgb, wo: Vec3, u1: f32
     if !reflection && cos_t == 0.0 {
         return None;
     }
-    let wi = if reflection { reflect(wo, m) } else { refract(wo, m, cos_t, eta_ti) };
+    let wi = if reflection {
+        reflect(wo, m)
+    } else {
+        refract(wo, m, cos_t, eta_ti)
+    };
     // A reflection must stay on wo's side and a refraction must cross the surface (as in
     // Mitsuba): otherwise `pdf_rough` would see the pair as the other event through another
     // microfacet, and the sample would land where the density does not account for it.

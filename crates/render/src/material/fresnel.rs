@@ -13,7 +13,11 @@ use crate::math::{safe_sqrt, Vec3};
 #[inline]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
     let outside = cos_i >= 0.0;
-    let (eta_it, eta_ti) = if outside { (eta, 1.0 / eta) } else { (1.0 / eta, eta) };
+    let (eta_it, eta_ti) = if outside {
+        (eta, 1.0 / eta)
+    } else {
+        (1.0 / eta, eta)
+    };
     // Snell's law for the squared cosine of the transmitted direction.
     let cos_t2 = 1.0 - (1.0 - cos_i * cos_i) * eta_ti * eta_ti;
     let ci = cos_i.abs();
@@ -150,7 +154,10 @@ mod tests {
                     fresnel_dielectric(c as f32, eta).0 as f64 * 2.0 * c / n as f64
                 })
                 .sum();
-            assert!((num - fresnel_diffuse_reflectance(eta) as f64).abs() < 0.01, "η = {eta}: {num}");
+            assert!(
+                (num - fresnel_diffuse_reflectance(eta) as f64).abs() < 0.01,
+                "η = {eta}: {num}"
+            );
         }
     }
 }

@@ -126,7 +126,11 @@ fn sample_ggx_vndf(wi: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
     // Stretch the view direction to the hemisphere configuration.
     let vh = Vec3::new(alpha * wi.x, alpha * wi.y, wi.z).normalize();
     let lensq = vh.x * vh.x + vh.y * vh.y;
-    let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3::X };
+    let t1 = if lensq > 0.0 {
+        Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt()
+    } else {
+        Vec3::X
+    };
     let t2 = vh.cross(t1);
     // Sample the projected area.
     let r = u[0].sqrt();
@@ -156,7 +160,9 @@ mod tests {
                     for j in 0..n {
                         let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
                         let m = square_to_uniform_hemisphere(u);
-                        sum += (Microfacet::new(dist, alpha).d(m) * m.z) as f64 * 2.0 * std::f64::consts::PI;
+                        sum += (Microfacet::new(dist, alpha).d(m) * m.z) as f64
+                            * 2.0
+                            * std::f64::consts::PI;
                     }
                 }
                 let mean = sum / (n * n) as f64;
@@ -178,7 +184,9 @@ mod tests {
                 for j in 0..n {
                     let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
                     let m = square_to_uniform_hemisphere(u);
-                    sum += (mf.g1(w, m) * w.dot(m).max(0.0) * mf.d(m)) as f64 * 2.0 * std::f64::consts::PI;
+                    sum += (mf.g1(w, m) * w.dot(m).max(0.0) * mf.d(m)) as f64
+                        * 2.0
+                        * std::f64::consts::PI;
                 }
             }
             let v = sum / (n * n) as f64;

@@ -239,7 +239,9 @@ impl Bsdf<'_> {
             BsdfModel::Lambert(r) => lambert::eval(*r, o, i),
             BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => Rgb::BLACK,
             BsdfModel::RoughConductor { mf, eta_k, r } => conductor::eval(mf, *eta_k, *r, o, i),
-            BsdfModel::RoughDielectric { mf, eta, r, t } => dielectric::eval_rough(mf, *eta, *r, *t, o, i),
+            BsdfModel::RoughDielectric { mf, eta, r, t } => {
+                dielectric::eval_rough(mf, *eta, *r, *t, o, i)
+            }
             BsdfModel::Plastic(p) => p.eval(o, i),
             BsdfModel::RoughPlastic(p) => p.eval(o, i),
             BsdfModel::Phong(p) => p.eval(o, i),
@@ -275,7 +277,9 @@ impl Bsdf<'_> {
             BsdfModel::Mirror { r, eta_k } => specular::sample(*r, *eta_k, o),
             BsdfModel::RoughConductor { mf, eta_k, r } => conductor::sample(mf, *eta_k, *r, o, u2),
             BsdfModel::Dielectric { eta, r, t } => dielectric::sample_smooth(*eta, *r, *t, o, u1),
-            BsdfModel::RoughDielectric { mf, eta, r, t } => dielectric::sample_rough(mf, *eta, *r, *t, o, u1, u2),
+            BsdfModel::RoughDielectric { mf, eta, r, t } => {
+                dielectric::sample_rough(mf, *eta, *r, *t, o, u1, u2)
+            }
             BsdfModel::Plastic(p) => p.sample(o, u1, u2),
             BsdfModel::RoughPlastic(p) => p.sample(o, u1, u2),
             BsdfModel::Phong(p) => p.sample(o, u1, u2),
@@ -297,14 +301,20 @@ impl Bsdf<'_> {
 
     /// True when every component is a Dirac delta (light sampling cannot help).
     pub fn is_delta(&self) -> bool {
-        matches!(self.model, BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. })
+        matches!(
+            self.model,
+            BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. }
+        )
     }
 }
 
 impl Material {
     /// A two-sided material (the candela language's rule).
     pub fn two_sided(model: Model) -> Self {
-        Self { model, two_sided: true }
+        Self {
+            model,
+            two_sided: true,
+        }
     }
 
     /// A one-sided material (Mitsuba's rule).
@@ -347,10 +357,19 @@ impl Material {
                 let (r, t) = (reflectance.eval(uv), transmittance.eval(uv));
                 match mf {
                     None => BsdfModel::Dielectric { eta: *eta, r, t },
-                    Some(mf) => BsdfModel::RoughDielectric { mf: *mf, eta: *eta, r, t },
+                    Some(mf) => BsdfModel::RoughDielectric {
+                        mf: *mf,
+                        eta: *eta,
+                        r,
+                        t,
+                    },
                 }
             }
-            Model::Conductor { eta_k, reflectance, mf } => match mf {
+            Model::Conductor {
+                eta_k,
+                reflectance,
+                mf,
+            } => match mf {
                 None => BsdfModel::Mirror {
                     r: reflectance.eval(uv),
                     eta_k: *eta_k,
@@ -361,13 +380,23 @@ impl Material {
                     r: reflectance.eval(uv),
                 },
             },
-            Model::Plastic { kd, ks, eta, nonlinear } => BsdfModel::Plastic(Plastic {
+            Model::Plastic {
+                kd,
+                ks,
+                eta,
+                nonlinear,
+            } => BsdfModel::Plastic(Plastic {
                 kd: kd.eval(uv),
                 ks: ks.eval(uv),
                 eta: *eta,
                 nonlinear: *nonlinear,
             }),
-            Model::RoughPlastic { kd, ks, coating, nonlinear } => BsdfModel::RoughPlastic(RoughPlastic {
+            Model::RoughPlastic {
+                kd,
+                ks,
+                coating,
+                nonlinear,
+            } => BsdfModel::RoughPlastic(RoughPlastic {
                 kd: kd.eval(uv),
                 ks: ks.eval(uv),
                 coating,
@@ -375,14 +404,23 @@ impl Material {
             }),
         };
         let two_sided = self.two_sided && !matches!(self.model, Model::Dielectric { .. });
-        Bsdf { model, frame, two_sided }
+        Bsdf {
+            model,
+            frame,
+            two_sided,
+        }
     }
 
     /// The material's main colour at `uv` (what the `flat` renderer shows).
     pub fn base_color(&self, uv: Point2) -> Rgb {
         match &self.model {
-            Model::Diffuse { reflectance } | Model::Specular { reflectance } => reflectance.eval(uv),
-            Model::Phong { kd, .. } | Model::CookTorrance { kd, .. } | Model::Plastic { kd, .. } | Model::RoughPlastic { kd, .. } => kd.eval(uv),
+            Model::Diffuse { reflectance } | Model::Specular { reflectance } => {
+                reflectance.eval(uv)
+            }
+            Model::Phong { kd, .. }
+            | Model::CookTorrance { kd, .. }
+            | Model::Plastic { kd, .. }
+            | Model::RoughPlastic { kd, .. } => kd.eval(uv),
             Model::Dielectric { transmittance, .. } => transmittance.eval(uv),
             Model::Conductor { reflectance, .. } => reflectance.eval(uv),
         }
@@ -392,7 +430,10 @@ impl Material {
     pub fn ambient(&self, uv: Point2) -> Rgb {
         match &self.model {
             Model::Diffuse { reflectance } => reflectance.eval(uv),
-            Model::Phong { kd, .. } | Model::CookTorrance { kd, .. } | Model::Plastic { kd, .. } | Model::RoughPlastic { kd, .. } => kd.eval(uv),
+            Model::Phong { kd, .. }
+            | Model::CookTorrance { kd, .. }
+            | Model::Plastic { kd, .. }
+            | Model::RoughPlastic { kd, .. } => kd.eval(uv),
             _ => Rgb::BLACK,
         }
     }
@@ -425,12 +466,17 @@ impl Material {
             .local(o, i, id, is),
             // Physically based models: their BSDF times the light, diffuse intensity for the
             // diffuse part, specular intensity for the glossy part.
-            Model::Plastic { .. } | Model::RoughPlastic { .. } | Model::Conductor { mf: Some(_), .. } | Model::Dielectric { mf: Some(_), .. } => {
+            Model::Plastic { .. }
+            | Model::RoughPlastic { .. }
+            | Model::Conductor { mf: Some(_), .. }
+            | Model::Dielectric { mf: Some(_), .. } => {
                 let b = self.bsdf(frame, uv);
                 b.eval(wo, wi) * is
             }
             // Dirac deltas receive nothing from a light direction.
-            Model::Specular { .. } | Model::Conductor { mf: None, .. } | Model::Dielectric { mf: None, .. } => Rgb::BLACK,
+            Model::Specular { .. }
+            | Model::Conductor { mf: None, .. }
+            | Model::Dielectric { mf: None, .. } => Rgb::BLACK,
         }
     }
 
@@ -439,11 +485,17 @@ impl Material {
     pub fn whitted(&self, uv: Point2, cos_o: f32) -> Whitted {
         match &self.model {
             Model::Specular { reflectance } => Whitted::mirror(reflectance.eval(uv)),
-            Model::Phong { ks, .. } | Model::CookTorrance { ks, .. } => Whitted::mirror(ks.eval(uv)),
-            Model::Conductor { eta_k, reflectance, .. } => {
-                Whitted::mirror(reflectance.eval(uv) * conductor::conductor_fresnel(*eta_k, cos_o.abs()))
+            Model::Phong { ks, .. } | Model::CookTorrance { ks, .. } => {
+                Whitted::mirror(ks.eval(uv))
             }
-            Model::Plastic { ks, eta, .. } => Whitted::mirror(ks.eval(uv) * fresnel::fresnel_dielectric(cos_o.abs(), *eta).0),
+            Model::Conductor {
+                eta_k, reflectance, ..
+            } => Whitted::mirror(
+                reflectance.eval(uv) * conductor::conductor_fresnel(*eta_k, cos_o.abs()),
+            ),
+            Model::Plastic { ks, eta, .. } => {
+                Whitted::mirror(ks.eval(uv) * fresnel::fresnel_dielectric(cos_o.abs(), *eta).0)
+            }
             Model::Dielectric {
                 eta,
                 reflectance,
@@ -470,6 +522,9 @@ pub struct Whitted {
 
 impl Whitted {
     fn mirror(reflect: Rgb) -> Self {
-        Self { reflect, refract: None }
+        Self {
+            reflect,
+            refract: None,
+        }
     }
 }

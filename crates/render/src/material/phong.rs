@@ -81,7 +81,10 @@ impl PhongBrdf {
                 if c <= 0.0 {
                     return (0.0, 0.0);
                 }
-                ((self.n + 2.0) * 0.5 * INV_PI * c.powf(self.n), lobe_pdf(self.n, c))
+                (
+                    (self.n + 2.0) * 0.5 * INV_PI * c.powf(self.n),
+                    lobe_pdf(self.n, c),
+                )
             }
             Lobe::BlinnPhong => {
                 let h = (wo + wi).normalize();
@@ -89,7 +92,10 @@ impl PhongBrdf {
                 if ch <= 0.0 || oh <= 0.0 {
                     return (0.0, 0.0);
                 }
-                (blinn_phong_norm(self.n) * ch.powf(self.n), lobe_pdf(self.n, ch) / (4.0 * oh))
+                (
+                    blinn_phong_norm(self.n) * ch.powf(self.n),
+                    lobe_pdf(self.n, ch) / (4.0 * oh),
+                )
             }
         }
     }

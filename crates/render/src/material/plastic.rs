@@ -62,7 +62,8 @@ impl Plastic {
         let f_i = fresnel_dielectric(wo.z, self.eta).0;
         let f_o = fresnel_dielectric(wi.z, self.eta).0;
         let fdr = fresnel_diffuse_reflectance(1.0 / self.eta);
-        base(self.kd, fdr, self.nonlinear) * (INV_PI * wi.z * (1.0 - f_i) * (1.0 - f_o) / (self.eta * self.eta))
+        base(self.kd, fdr, self.nonlinear)
+            * (INV_PI * wi.z * (1.0 - f_i) * (1.0 - f_o) / (self.eta * self.eta))
     }
 
     /// The density of sampling the diffuse part.
@@ -124,8 +125,14 @@ impl RoughCoating {
     /// Tabulates the coating (numerical integration of its specular albedo).
     pub fn new(mf: Microfacet, eta: f32) -> Self {
         let mu = |i: usize| (i as f32 / (TABLE - 1) as f32).max(1e-6);
-        let transmittance = (0..TABLE).map(|i| 1.0 - specular_albedo(&mf, eta, mu(i))).collect();
-        let internal = (0..TABLE).map(|i| specular_albedo(&mf, 1.0 / eta, mu(i)) * mu(i)).sum::<f32>() / TABLE as f32 * 2.0;
+        let transmittance = (0..TABLE)
+            .map(|i| 1.0 - specular_albedo(&mf, eta, mu(i)))
+            .collect();
+        let internal = (0..TABLE)
+            .map(|i| specular_albedo(&mf, 1.0 / eta, mu(i)) * mu(i))
+            .sum::<f32>()
+            / TABLE as f32
+            * 2.0;
         Self {
             mf,
             eta,
@@ -205,7 +212,8 @@ impl RoughPlastic<'_> {
             None => Rgb::BLACK,
         };
         let (t_i, t_o) = (c.transmittance(wo.z), c.transmittance(wi.z));
-        let diff = base(self.kd, c.internal_reflectance, self.nonlinear) * (INV_PI * wi.z * t_i * t_o / (c.eta * c.eta));
+        let diff = base(self.kd, c.internal_reflectance, self.nonlinear)
+            * (INV_PI * wi.z * t_i * t_o / (c.eta * c.eta));
         spec + diff
     }
 
@@ -224,7 +232,11 @@ impl RoughPlastic<'_> {
             return None;
         }
         let ps = self.specular_probability(self.coating.transmittance(wo.z));
-        let wi = if u1 < ps { reflect(wo, self.coating.mf.sample(wo, u2)) } else { square_to_cosine_hemisphere(u2) };
+        let wi = if u1 < ps {
+            reflect(wo, self.coating.mf.sample(wo, u2))
+        } else {
+            square_to_cosine_hemisphere(u2)
+        };
         let pdf = self.pdf(wo, wi);
         if !(pdf > 0.0) || wi.z <= 0.0 {
             return None;

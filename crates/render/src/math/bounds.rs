@@ -119,7 +119,12 @@ impl Bounds3 {
 
     /// True when `p` is inside or on the boundary.
     pub fn contains(&self, p: Point3) -> bool {
-        p.x >= self.min.x && p.x <= self.max.x && p.y >= self.min.y && p.y <= self.max.y && p.z >= self.min.z && p.z <= self.max.z
+        p.x >= self.min.x
+            && p.x <= self.max.x
+            && p.y >= self.min.y
+            && p.y <= self.max.y
+            && p.z >= self.min.z
+            && p.z <= self.max.z
     }
 
     /// The box of the eight transformed corners.

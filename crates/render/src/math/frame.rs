@@ -37,7 +37,11 @@ impl Frame {
             return Self::from_normal(n);
         }
         let s = s / len;
-        Self { s, t: nv.cross(s), n: nv }
+        Self {
+            s,
+            t: nv.cross(s),
+            n: nv,
+        }
     }
 
     /// World → local coordinates.

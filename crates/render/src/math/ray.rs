@@ -118,7 +118,11 @@ mod tests {
     #[test]
     fn offset_moves_to_the_side_of_the_direction() {
         let n = Normal3::new(0.0, 0.0, 1.0);
-        for p in [Point3::new(0.0, 0.0, 0.0), Point3::new(100.0, -3.0, 7.0), Point3::new(0.5, 0.5, -1e4)] {
+        for p in [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(100.0, -3.0, 7.0),
+            Point3::new(0.5, 0.5, -1e4),
+        ] {
             let up = offset_ray_origin(p, n, Vec3::new(0.3, 0.0, 1.0));
             let down = offset_ray_origin(p, n, Vec3::new(0.3, 0.0, -1.0));
             assert!(up.z > p.z && down.z < p.z, "{p:?}: {up:?} {down:?}");

@@ -237,9 +237,24 @@ impl Transform {
         let (s, c) = (s as f32, c as f32);
         let t = 1.0 - c;
         let m = Matrix4::new([
-            [t * a.x * a.x + c, t * a.x * a.y - s * a.z, t * a.x * a.z + s * a.y, 0.0],
-            [t * a.x * a.y + s * a.z, t * a.y * a.y + c, t * a.y * a.z - s * a.x, 0.0],
-            [t * a.x * a.z - s * a.y, t * a.y * a.z + s * a.x, t * a.z * a.z + c, 0.0],
+            [
+                t * a.x * a.x + c,
+                t * a.x * a.y - s * a.z,
+                t * a.x * a.z + s * a.y,
+                0.0,
+            ],
+            [
+                t * a.x * a.y + s * a.z,
+                t * a.y * a.y + c,
+                t * a.y * a.z - s * a.x,
+                0.0,
+            ],
+            [
+                t * a.x * a.z - s * a.y,
+                t * a.y * a.z + s * a.x,
+                t * a.z * a.z + c,
+                0.0,
+            ],
             [0.0, 0.0, 0.0, 1.0],
         ]);
         Some(Self {
@@ -441,9 +456,15 @@ mod tests {
 
     #[test]
     fn rotations_are_right_handed() {
-        assert!(Transform::rotation_x(90.0).vector(Vec3::Y).approx_eq(Vec3::Z, EPS));
-        assert!(Transform::rotation_y(90.0).vector(Vec3::Z).approx_eq(Vec3::X, EPS));
-        assert!(Transform::rotation_z(90.0).vector(Vec3::X).approx_eq(Vec3::Y, EPS));
+        assert!(Transform::rotation_x(90.0)
+            .vector(Vec3::Y)
+            .approx_eq(Vec3::Z, EPS));
+        assert!(Transform::rotation_y(90.0)
+            .vector(Vec3::Z)
+            .approx_eq(Vec3::X, EPS));
+        assert!(Transform::rotation_z(90.0)
+            .vector(Vec3::X)
+            .approx_eq(Vec3::Y, EPS));
         let r = Transform::rotation(Vec3::Z, 90.0).unwrap();
         assert!(r.vector(Vec3::X).approx_eq(Vec3::Y, EPS));
     }
@@ -453,17 +474,27 @@ mod tests {
         let t = Transform::translation(Vec3::new(1.0, 0.0, 0.0));
         let r = Transform::rotation_z(90.0);
         // r * t: translate to (1,0,0), then rotate to (0,1,0).
-        assert!((r * t).point(Point3::ORIGIN).to_vec().approx_eq(Vec3::Y, EPS));
+        assert!((r * t)
+            .point(Point3::ORIGIN)
+            .to_vec()
+            .approx_eq(Vec3::Y, EPS));
         // t * r: the rotation leaves the origin fixed, then translate.
-        assert!((t * r).point(Point3::ORIGIN).to_vec().approx_eq(Vec3::X, EPS));
+        assert!((t * r)
+            .point(Point3::ORIGIN)
+            .to_vec()
+            .approx_eq(Vec3::X, EPS));
         let p = Point3::new(1.0, 2.0, 3.0);
         assert!((t * r).inv_point((t * r).point(p)).approx_eq(p, EPS));
     }
 
     #[test]
     fn points_vectors_normals_transform_differently() {
-        let t = Transform::translation(Vec3::new(1.0, 2.0, 3.0)) * Transform::scaling(Vec3::new(2.0, 1.0, 1.0));
-        assert_eq!(t.point(Point3::new(1.0, 1.0, 1.0)), Point3::new(3.0, 3.0, 4.0));
+        let t = Transform::translation(Vec3::new(1.0, 2.0, 3.0))
+            * Transform::scaling(Vec3::new(2.0, 1.0, 1.0));
+        assert_eq!(
+            t.point(Point3::new(1.0, 1.0, 1.0)),
+            Point3::new(3.0, 3.0, 4.0)
+        );
         assert_eq!(t.vector(Vec3::new(1.0, 1.0, 1.0)), Vec3::new(2.0, 1.0, 1.0));
         // The plane x + y = 0 has normal (1,1,0); scaled by 2 in x it becomes x/2 + y = 0.
         let n = t.normal(Normal3::new(1.0, 1.0, 0.0));
@@ -477,7 +508,11 @@ mod tests {
     #[test]
     fn look_at_follows_the_course_camera_convention() {
         let t = Transform::look_at(Point3::new(-1.0, 0.0, 0.0), Point3::ORIGIN, Vec3::Z).unwrap();
-        assert!(t.is_identity() || t.m.approx_eq(&Transform::translation(Vec3::new(-1.0, 0.0, 0.0)).m, EPS));
+        assert!(
+            t.is_identity()
+                || t.m
+                    .approx_eq(&Transform::translation(Vec3::new(-1.0, 0.0, 0.0)).m, EPS)
+        );
         let t = Transform::look_at(Point3::new(0.0, 0.0, 5.0), Point3::ORIGIN, Vec3::Y).unwrap();
         assert!(t.vector(Vec3::X).approx_eq(-Vec3::Z, EPS));
         assert!(t.vector(Vec3::Z).approx_eq(Vec3::Y, EPS));

@@ -365,7 +365,10 @@ mod tests {
     #[test]
     fn normals_face_forward() {
         let n = Normal3::new(0.0, 0.0, 1.0);
-        assert_eq!(n.face_forward(Vec3::new(0.0, 1.0, -1.0)), Normal3::new(0.0, 0.0, -1.0));
+        assert_eq!(
+            n.face_forward(Vec3::new(0.0, 1.0, -1.0)),
+            Normal3::new(0.0, 0.0, -1.0)
+        );
         assert_eq!(n.face_forward(Vec3::new(0.0, 1.0, 1.0)), n);
         assert_eq!(Vec3::new(0.0, 3.0, -1.0).max_dimension(), 1);
     }

@@ -16,7 +16,9 @@ impl Distribution1D {
         let func: Vec<f32> = if func.is_empty() {
             vec![1.0]
         } else {
-            func.iter().map(|&f| if f.is_finite() && f > 0.0 { f } else { 0.0 }).collect()
+            func.iter()
+                .map(|&f| if f.is_finite() && f > 0.0 { f } else { 0.0 })
+                .collect()
         };
         let mut cdf = vec![0f32; n + 1];
         let mut acc = 0f64;
@@ -35,7 +37,11 @@ impl Distribution1D {
             }
         }
         cdf[n] = 1.0;
-        Self { func, cdf, integral }
+        Self {
+            func,
+            cdf,
+            integral,
+        }
     }
 
     /// Number of bins.
@@ -60,7 +66,11 @@ impl Distribution1D {
         // The last bin whose CDF start is ≤ u.
         let i = self.cdf[1..n].partition_point(|&c| c <= u).min(n - 1);
         let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
-        let du = if hi > lo { ((u - lo) / (hi - lo)).clamp(0.0, super::sampler::ONE_MINUS_EPSILON) } else { 0.5 };
+        let du = if hi > lo {
+            ((u - lo) / (hi - lo)).clamp(0.0, super::sampler::ONE_MINUS_EPSILON)
+        } else {
+            0.5
+        };
         (i, du)
     }
 
@@ -95,9 +105,15 @@ pub struct Distribution2D {
 impl Distribution2D {
     /// The distribution proportional to `func` with `nu` columns and `nv` rows (row-major).
     pub fn new(func: &[f32], nu: usize, nv: usize) -> Self {
-        let conditional: Vec<Distribution1D> = (0..nv).map(|v| Distribution1D::new(&func[v * nu..(v + 1) * nu])).collect();
-        let marginal = Distribution1D::new(&conditional.iter().map(|c| c.integral()).collect::<Vec<_>>());
-        Self { conditional, marginal }
+        let conditional: Vec<Distribution1D> = (0..nv)
+            .map(|v| Distribution1D::new(&func[v * nu..(v + 1) * nu]))
+            .collect();
+        let marginal =
+            Distribution1D::new(&conditional.iter().map(|c| c.integral()).collect::<Vec<_>>());
+        Self {
+            conditional,
+            marginal,
+        }
     }
 
     /// A point (u, v) and its density.

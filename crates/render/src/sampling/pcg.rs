@@ -96,7 +96,14 @@ mod tests {
     fn reproduces_the_reference_pcg32_demo() {
         // pcg32-demo of the reference C implementation, seeded with (42, 54).
         let mut r = Pcg32::new(42, 54);
-        let expected = [0xa15c02b7u32, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e];
+        let expected = [
+            0xa15c02b7u32,
+            0x7b47f409,
+            0xba1d3330,
+            0x83d2f293,
+            0xbfa4784b,
+            0xcbed606e,
+        ];
         for e in expected {
             assert_eq!(r.next_u32(), e);
         }

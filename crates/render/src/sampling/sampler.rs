@@ -78,7 +78,10 @@ impl Sampler {
                 let s = hash_u32(seed, self.dim);
                 self.dim += 1;
                 let i = nested_uniform_scramble(self.index, s);
-                to_unit(nested_uniform_scramble(i.reverse_bits(), mix32(s ^ 0x5bd1_e995)))
+                to_unit(nested_uniform_scramble(
+                    i.reverse_bits(),
+                    mix32(s ^ 0x5bd1_e995),
+                ))
             }
             None => self.rng.next_f32(),
         }
@@ -148,7 +151,10 @@ fn sobol_dim1(i: u32) -> u32 {
         t
     }
     static TABLE: [[u32; 256]; 4] = table();
-    TABLE[0][(i & 0xff) as usize] ^ TABLE[1][((i >> 8) & 0xff) as usize] ^ TABLE[2][((i >> 16) & 0xff) as usize] ^ TABLE[3][(i >> 24) as usize]
+    TABLE[0][(i & 0xff) as usize]
+        ^ TABLE[1][((i >> 8) & 0xff) as usize]
+        ^ TABLE[2][((i >> 16) & 0xff) as usize]
+        ^ TABLE[3][(i >> 24) as usize]
 }
 
 /// Laine and Karras' hash-based permutation, which only lets bits influence higher bits.

@@ -142,7 +142,12 @@ mod tests {
     use super::*;
 
     fn grid(n: usize) -> impl Iterator<Item = [f32; 2]> {
-        (0..n * n).map(move |i| [((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32])
+        (0..n * n).map(move |i| {
+            [
+                ((i % n) as f32 + 0.5) / n as f32,
+                ((i / n) as f32 + 0.5) / n as f32,
+            ]
+        })
     }
 
     #[test]
@@ -167,7 +172,10 @@ mod tests {
     fn cosine_hemisphere_has_the_right_mean_cosine() {
         // E[cos θ] under pdf cos θ/π is 2/3.
         let n = 256;
-        let mean: f64 = grid(n).map(|u| square_to_cosine_hemisphere(u).z as f64).sum::<f64>() / (n * n) as f64;
+        let mean: f64 = grid(n)
+            .map(|u| square_to_cosine_hemisphere(u).z as f64)
+            .sum::<f64>()
+            / (n * n) as f64;
         assert!((mean - 2.0 / 3.0).abs() < 1e-3, "{mean}");
     }
 

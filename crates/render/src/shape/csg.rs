@@ -130,7 +130,11 @@ impl Csg {
         let b = *bounds.last()?;
         Some(Self {
             nodes,
-            bounds: if b.is_empty() { Bounds3::point(crate::math::Point3::ORIGIN) } else { b },
+            bounds: if b.is_empty() {
+                Bounds3::point(crate::math::Point3::ORIGIN)
+            } else {
+                b
+            },
         })
     }
 
@@ -190,13 +194,17 @@ impl Csg {
     /// The first crossing of node `node` with the ray's line strictly after `tmin`.
     fn next(&self, node: u32, ray: &Ray, sr: &ShearedRay, tmin: f32) -> Option<Event> {
         match &self.nodes[node as usize] {
-            CsgNode::Leaf { solid, .. } => solid.next_crossing(ray, sr, tmin).map(|(hit, entering)| Event {
-                hit,
-                leaf: node,
-                flip: false,
-                in_before: !entering,
-                in_after: entering,
-            }),
+            CsgNode::Leaf { solid, .. } => {
+                solid
+                    .next_crossing(ray, sr, tmin)
+                    .map(|(hit, entering)| Event {
+                        hit,
+                        leaf: node,
+                        flip: false,
+                        in_before: !entering,
+                        in_after: entering,
+                    })
+            }
             &CsgNode::Op { op, a, b } => {
                 let mut ea = self.next(a, ray, sr, tmin);
                 let mut eb = self.next(b, ray, sr, tmin);
@@ -213,9 +221,15 @@ impl Csg {
                         (eb?, ea.is_some_and(|x| x.in_before))
                     };
                     let (before, after) = if from_a {
-                        (op.inside(e.in_before, other_in), op.inside(e.in_after, other_in))
+                        (
+                            op.inside(e.in_before, other_in),
+                            op.inside(e.in_after, other_in),
+                        )
                     } else {
-                        (op.inside(other_in, e.in_before), op.inside(other_in, e.in_after))
+                        (
+                            op.inside(other_in, e.in_before),
+                            op.inside(other_in, e.in_after),
+                        )
                     };
                     let interior = e.in_before && e.in_after;
                     let visible = match op {
@@ -251,7 +265,9 @@ impl Solid {
             Solid::Sphere(s) => s.bounds(),
             Solid::Cube(c) => c.bounds(),
             Solid::Polyhedron(p) => p.bounds(),
-            Solid::Mesh(m) => (0..m.len() as u32).fold(Bounds3::EMPTY, |b, i| b.union(m.triangle_bounds(i))),
+            Solid::Mesh(m) => {
+                (0..m.len() as u32).fold(Bounds3::EMPTY, |b, i| b.union(m.triangle_bounds(i)))
+            }
         }
     }
 
@@ -263,7 +279,10 @@ impl Solid {
             Solid::Polyhedron(p) => {
                 let mut p = p.clone();
                 p.world_from_object = *t * p.world_from_object;
-                Solid::Polyhedron(Polyhedron::new(p.world_from_object, p.planes()).expect("a valid polyhedron stays valid"))
+                Solid::Polyhedron(
+                    Polyhedron::new(p.world_from_object, p.planes())
+                        .expect("a valid polyhedron stays valid"),
+                )
             }
             Solid::Mesh(m) => Solid::Mesh(m.transformed(t)),
         }
@@ -274,8 +293,20 @@ impl Solid {
     fn next_crossing(&self, ray: &Ray, sr: &ShearedRay, tmin: f32) -> Option<(ShapeHit, bool)> {
         let convex = |c: Option<(Crossing, Crossing)>| {
             let (near, far) = c?;
-            let ((t, sub), entering) = if near.0 > tmin { (near, true) } else { (far, false) };
-            (t > tmin).then_some((ShapeHit { t, uv: [0.0; 2], sub, leaf: 0 }, entering))
+            let ((t, sub), entering) = if near.0 > tmin {
+                (near, true)
+            } else {
+                (far, false)
+            };
+            (t > tmin).then_some((
+                ShapeHit {
+                    t,
+                    uv: [0.0; 2],
+                    sub,
+                    leaf: 0,
+                },
+                entering,
+            ))
         };
         match self {
             Solid::Sphere(s) => {
@@ -331,7 +362,12 @@ mod tests {
     /// Two unit spheres centred at x = 0 (material 0) and x = 1 (material 1), overlapping on
     /// [0, 1] along the x axis: A spans [-1, 1], B spans [0, 2].
     fn two(op: CsgOp) -> Csg {
-        Csg::new(vec![sphere_at(0.0, 0), sphere_at(1.0, 1), CsgNode::Op { op, a: 0, b: 1 }]).unwrap()
+        Csg::new(vec![
+            sphere_at(0.0, 0),
+            sphere_at(1.0, 1),
+            CsgNode::Op { op, a: 0, b: 1 },
+        ])
+        .unwrap()
     }
 
     /// All visible crossings along the x axis from x = -5, in order: (x, material, normal x).
@@ -348,11 +384,28 @@ mod tests {
 
     #[test]
     fn each_operation_keeps_the_right_intervals() {
-        assert_eq!(walk(&two(CsgOp::Union)), vec![(-1.0, 0, -1.0), (0.0, 1, -1.0), (1.0, 0, 1.0), (2.0, 1, 1.0)]);
-        assert_eq!(walk(&two(CsgOp::Fusion)), vec![(-1.0, 0, -1.0), (2.0, 1, 1.0)]);
-        assert_eq!(walk(&two(CsgOp::Intersection)), vec![(0.0, 1, -1.0), (1.0, 0, 1.0)]);
+        assert_eq!(
+            walk(&two(CsgOp::Union)),
+            vec![
+                (-1.0, 0, -1.0),
+                (0.0, 1, -1.0),
+                (1.0, 0, 1.0),
+                (2.0, 1, 1.0)
+            ]
+        );
+        assert_eq!(
+            walk(&two(CsgOp::Fusion)),
+            vec![(-1.0, 0, -1.0), (2.0, 1, 1.0)]
+        );
+        assert_eq!(
+            walk(&two(CsgOp::Intersection)),
+            vec![(0.0, 1, -1.0), (1.0, 0, 1.0)]
+        );
         // A − B: B's near surface becomes A−B's exit, its normal flipped to point out (+x... −(−1)).
-        assert_eq!(walk(&two(CsgOp::Difference)), vec![(-1.0, 0, -1.0), (0.0, 1, 1.0)]);
+        assert_eq!(
+            walk(&two(CsgOp::Difference)),
+            vec![(-1.0, 0, -1.0), (0.0, 1, 1.0)]
+        );
     }
 
     #[test]
@@ -378,16 +431,25 @@ mod tests {
         // (A ∪fusion B) − C with C a box around x = 2: the fusion's far end is cut away.
         let c = CsgNode::Leaf {
             solid: Solid::Cube(Cube::new(
-                Transform::translation(Vec3::new(2.0, 0.0, 0.0)) * Transform::scaling(Vec3::new(0.5, 1.0, 1.0)),
+                Transform::translation(Vec3::new(2.0, 0.0, 0.0))
+                    * Transform::scaling(Vec3::new(0.5, 1.0, 1.0)),
             )),
             props: SurfaceProps::new(2),
         };
         let t = Csg::new(vec![
             sphere_at(0.0, 0),
             sphere_at(1.0, 1),
-            CsgNode::Op { op: CsgOp::Fusion, a: 0, b: 1 },
+            CsgNode::Op {
+                op: CsgOp::Fusion,
+                a: 0,
+                b: 1,
+            },
             c,
-            CsgNode::Op { op: CsgOp::Difference, a: 2, b: 3 },
+            CsgNode::Op {
+                op: CsgOp::Difference,
+                a: 2,
+                b: 3,
+            },
         ])
         .unwrap();
         assert_eq!(walk(&t), vec![(-1.0, 0, -1.0), (1.5, 2, 1.0)]);
@@ -395,7 +457,12 @@ mod tests {
         let w = walk(&moved);
         assert_eq!(w.len(), 2);
         assert!((w[0].0 - 9.0).abs() < 1e-5 && (w[1].0 - 11.5).abs() < 1e-5);
-        assert!(Csg::new(vec![CsgNode::Op { op: CsgOp::Union, a: 0, b: 0 }]).is_none());
+        assert!(Csg::new(vec![CsgNode::Op {
+            op: CsgOp::Union,
+            a: 0,
+            b: 0
+        }])
+        .is_none());
     }
 
     #[test]

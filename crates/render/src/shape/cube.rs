@@ -42,7 +42,11 @@ impl Cube {
             let inv = 1.0 / da;
             let (t_minus, t_plus) = ((-1.0 - oa) * inv, (1.0 - oa) * inv);
             let a = axis as u32 * 2;
-            let (tn, tf) = if t_minus < t_plus { ((t_minus, a), (t_plus, a + 1)) } else { ((t_plus, a + 1), (t_minus, a)) };
+            let (tn, tf) = if t_minus < t_plus {
+                ((t_minus, a), (t_plus, a + 1))
+            } else {
+                ((t_plus, a + 1), (t_minus, a))
+            };
             if tn.0 > near.0 {
                 near = tn;
             }
@@ -114,8 +118,16 @@ impl Cube {
     /// The world-space area of each face (faces `2·axis + side`).
     pub fn face_areas(&self) -> [f32; 6] {
         let w = &self.world_from_object;
-        let (ex, ey, ez) = (w.vector(Vec3::X * 2.0), w.vector(Vec3::Y * 2.0), w.vector(Vec3::Z * 2.0));
-        let (ax, ay, az) = (ey.cross(ez).norm(), ex.cross(ez).norm(), ex.cross(ey).norm());
+        let (ex, ey, ez) = (
+            w.vector(Vec3::X * 2.0),
+            w.vector(Vec3::Y * 2.0),
+            w.vector(Vec3::Z * 2.0),
+        );
+        let (ax, ay, az) = (
+            ey.cross(ez).norm(),
+            ex.cross(ez).norm(),
+            ex.cross(ey).norm(),
+        );
         [ax, ax, ay, ay, az, az]
     }
 
@@ -131,7 +143,8 @@ impl Cube {
 
     /// Bounds of the transformed corners.
     pub fn bounds(&self) -> Bounds3 {
-        Bounds3::new(Point3::new(-1.0, -1.0, -1.0), Point3::new(1.0, 1.0, 1.0)).transform(&self.world_from_object)
+        Bounds3::new(Point3::new(-1.0, -1.0, -1.0), Point3::new(1.0, 1.0, 1.0))
+            .transform(&self.world_from_object)
     }
 }
 
@@ -155,25 +168,39 @@ mod tests {
         assert_eq!((h.t, h.sub), (1.0, 5));
         assert_eq!(c.geometry(&r, h.t, h.sub).n, Normal3::new(0.0, 0.0, 1.0));
         // Parallel to faces: inside the slab, and outside it.
-        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 2.0, 0.0), Vec3::X)).is_none());
-        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 1.0, 0.0), Vec3::X)).is_some());
+        assert!(c
+            .intersect(&Ray::new(Point3::new(-3.0, 2.0, 0.0), Vec3::X))
+            .is_none());
+        assert!(c
+            .intersect(&Ray::new(Point3::new(-3.0, 1.0, 0.0), Vec3::X))
+            .is_some());
         // Along an edge and through a vertex.
-        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 1.0, 1.0), Vec3::X)).is_some());
+        assert!(c
+            .intersect(&Ray::new(Point3::new(-3.0, 1.0, 1.0), Vec3::X))
+            .is_some());
         let diag = Ray::new(Point3::new(-2.0, -2.0, -2.0), Vec3::new(1.0, 1.0, 1.0));
         assert_eq!(c.intersect(&diag).unwrap().t, 1.0);
         // Pointing away.
-        assert!(c.intersect(&Ray::new(Point3::new(-3.0, 0.0, 0.0), -Vec3::X)).is_none());
+        assert!(c
+            .intersect(&Ray::new(Point3::new(-3.0, 0.0, 0.0), -Vec3::X))
+            .is_none());
     }
 
     #[test]
     fn transformed_cube_by_hand() {
-        let c = Cube::new(Transform::translation(Vec3::new(0.0, 0.0, 5.0)) * Transform::scaling(Vec3::new(1.0, 1.0, 2.0)));
+        let c = Cube::new(
+            Transform::translation(Vec3::new(0.0, 0.0, 5.0))
+                * Transform::scaling(Vec3::new(1.0, 1.0, 2.0)),
+        );
         let r = Ray::new(Point3::ORIGIN, Vec3::Z);
         let h = c.intersect(&r).unwrap();
         assert_eq!((h.t, h.sub), (3.0, 4));
         let g = c.geometry(&r, h.t, h.sub);
         assert_eq!(g.n, Normal3::new(0.0, 0.0, -1.0));
         assert_eq!(g.p, Point3::new(0.0, 0.0, 3.0));
-        assert_eq!(c.bounds(), Bounds3::new(Point3::new(-1.0, -1.0, 3.0), Point3::new(1.0, 1.0, 7.0)));
+        assert_eq!(
+            c.bounds(),
+            Bounds3::new(Point3::new(-1.0, -1.0, 3.0), Point3::new(1.0, 1.0, 7.0))
+        );
     }
 }

@@ -59,7 +59,8 @@ impl Disk {
 
     /// Bounds of the transformed unit square around the disk.
     pub fn bounds(&self) -> Bounds3 {
-        Bounds3::new(Point3::new(-1.0, -1.0, 0.0), Point3::new(1.0, 1.0, 0.0)).transform(&self.world_from_object)
+        Bounds3::new(Point3::new(-1.0, -1.0, 0.0), Point3::new(1.0, 1.0, 0.0))
+            .transform(&self.world_from_object)
     }
 }
 
@@ -76,6 +77,11 @@ mod tests {
         let g = d.geometry(h.uv[0], h.uv[1]);
         assert_eq!(g.p, Point3::new(0.0, 0.5, 1.0));
         assert_eq!((g.uv.x, g.uv.y), (0.5, 0.25));
-        assert!(d.intersect(&Ray::new(Point3::new(0.8, 0.8, 3.0), Vec3::new(0.0, 0.0, -1.0))).is_none());
+        assert!(d
+            .intersect(&Ray::new(
+                Point3::new(0.8, 0.8, 3.0),
+                Vec3::new(0.0, 0.0, -1.0)
+            ))
+            .is_none());
     }
 }

@@ -99,7 +99,12 @@ mod tests {
 
     #[test]
     fn hits_by_hand() {
-        let q = Parallelogram::new(Point3::new(1.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(1.0, 1.0, 0.0)).unwrap();
+        let q = Parallelogram::new(
+            Point3::new(1.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+        )
+        .unwrap();
         let r = Ray::new(Point3::new(2.5, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0));
         let h = q.intersect(&r).unwrap();
         assert_eq!(h.t, 1.0);
@@ -110,10 +115,24 @@ mod tests {
         assert_eq!(g.n, Normal3::new(0.0, 0.0, 1.0));
         assert!((q.area() - 2.0).abs() < 1e-6);
         // Just outside the slanted edge, parallel, and edge/vertex hits.
-        assert!(q.intersect(&Ray::new(Point3::new(1.2, 0.5, 1.0), Vec3::new(0.0, 0.0, -1.0))).is_none());
-        assert!(q.intersect(&Ray::new(Point3::new(2.0, 0.5, 1.0), Vec3::X)).is_none());
-        assert!(q.intersect(&Ray::new(Point3::new(1.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0))).is_some());
-        assert!(q.intersect(&Ray::new(Point3::new(4.0, 1.0, -1.0), Vec3::Z)).is_some());
+        assert!(q
+            .intersect(&Ray::new(
+                Point3::new(1.2, 0.5, 1.0),
+                Vec3::new(0.0, 0.0, -1.0)
+            ))
+            .is_none());
+        assert!(q
+            .intersect(&Ray::new(Point3::new(2.0, 0.5, 1.0), Vec3::X))
+            .is_none());
+        assert!(q
+            .intersect(&Ray::new(
+                Point3::new(1.0, 0.0, 1.0),
+                Vec3::new(0.0, 0.0, -1.0)
+            ))
+            .is_some());
+        assert!(q
+            .intersect(&Ray::new(Point3::new(4.0, 1.0, -1.0), Vec3::Z))
+            .is_some());
         assert!(Parallelogram::new(Point3::ORIGIN, Vec3::X, Vec3::X * 2.0).is_none());
     }
 }

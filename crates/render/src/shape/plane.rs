@@ -28,7 +28,12 @@ impl Plane {
             return None;
         }
         let t = -oz / dz;
-        (t > ray.tmin && t < ray.tmax).then_some(ShapeHit { t, uv: [0.0; 2], sub: 0, leaf: 0 })
+        (t > ray.tmin && t < ray.tmax).then_some(ShapeHit {
+            t,
+            uv: [0.0; 2],
+            sub: 0,
+            leaf: 0,
+        })
     }
 
     /// The surface at a hit found by [`Plane::intersect`].
@@ -63,8 +68,12 @@ mod tests {
         assert_eq!(g.n, Normal3::new(0.0, 0.0, 1.0));
         assert_eq!((g.uv.x, g.uv.y), (0.25, 0.25));
         // Parallel, pointing away, and from below.
-        assert!(p.intersect(&Ray::new(Point3::new(0.0, 0.0, 1.0), Vec3::X)).is_none());
-        assert!(p.intersect(&Ray::new(Point3::new(0.0, 0.0, 1.0), Vec3::Z)).is_none());
+        assert!(p
+            .intersect(&Ray::new(Point3::new(0.0, 0.0, 1.0), Vec3::X))
+            .is_none());
+        assert!(p
+            .intersect(&Ray::new(Point3::new(0.0, 0.0, 1.0), Vec3::Z))
+            .is_none());
         let below = Ray::new(Point3::new(0.0, 0.0, -2.0), Vec3::new(0.0, 0.0, 1.0));
         assert_eq!(p.intersect(&below).unwrap().t, 2.0);
     }
@@ -72,7 +81,9 @@ mod tests {
     #[test]
     fn transformed_plane_by_hand() {
         // The plane x = 3 with its normal along +x.
-        let p = Plane::new(Transform::translation(Vec3::new(3.0, 0.0, 0.0)) * Transform::rotation_y(90.0));
+        let p = Plane::new(
+            Transform::translation(Vec3::new(3.0, 0.0, 0.0)) * Transform::rotation_y(90.0),
+        );
         let r = Ray::new(Point3::ORIGIN, Vec3::X);
         let h = p.intersect(&r).unwrap();
         assert!((h.t - 3.0).abs() < 1e-6);

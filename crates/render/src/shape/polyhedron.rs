@@ -34,8 +34,12 @@ pub enum PolyhedronError {
 impl std::fmt::Display for PolyhedronError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            PolyhedronError::BadNormal(i) => write!(f, "half-space {} has a zero or invalid normal", i + 1),
-            PolyhedronError::Unbounded => write!(f, "the half-spaces do not enclose a bounded solid"),
+            PolyhedronError::BadNormal(i) => {
+                write!(f, "half-space {} has a zero or invalid normal", i + 1)
+            }
+            PolyhedronError::Unbounded => {
+                write!(f, "the half-spaces do not enclose a bounded solid")
+            }
             PolyhedronError::Empty => write!(f, "the half-spaces have no common volume"),
         }
     }
@@ -43,7 +47,10 @@ impl std::fmt::Display for PolyhedronError {
 
 impl Polyhedron {
     /// The polyhedron ∩ {n·x ≤ d}, placed by `t`.
-    pub fn new(world_from_object: Transform, halfspaces: &[(Vec3, f32)]) -> Result<Self, PolyhedronError> {
+    pub fn new(
+        world_from_object: Transform,
+        halfspaces: &[(Vec3, f32)],
+    ) -> Result<Self, PolyhedronError> {
         let mut planes = Vec::with_capacity(halfspaces.len());
         for (i, &(n, d)) in halfspaces.iter().enumerate() {
             let len = n.norm();
@@ -177,9 +184,13 @@ fn vertex_bounds(planes: &[(Vec3, f32)]) -> Option<Bounds3> {
                     continue;
                 }
                 // Cramer's rule for x with nᵢ·x = dᵢ for the three planes.
-                let x = (b1.0.cross(c.0) * a.1 + c.0.cross(a.0) * b1.1 + a.0.cross(b1.0) * c.1) / det;
+                let x =
+                    (b1.0.cross(c.0) * a.1 + c.0.cross(a.0) * b1.1 + a.0.cross(b1.0) * c.1) / det;
                 let scale = 1.0 + x.norm();
-                if planes.iter().all(|&(pn, pd)| pn.dot(x) <= pd + 1e-5 * scale) {
+                if planes
+                    .iter()
+                    .all(|&(pn, pd)| pn.dot(x) <= pd + 1e-5 * scale)
+                {
                     b = b.union_point(x.to_point());
                 }
             }
@@ -191,7 +202,9 @@ fn vertex_bounds(planes: &[(Vec3, f32)]) -> Option<Bounds3> {
 impl Polyhedron {
     /// The outward normal of plane `i` in world space (unit).
     pub fn plane_normal(&self, i: u32) -> Normal3 {
-        self.world_from_object.normal(self.planes[i as usize].0.to_normal()).normalize()
+        self.world_from_object
+            .normal(self.planes[i as usize].0.to_normal())
+            .normalize()
     }
 }
 
@@ -214,7 +227,10 @@ mod tests {
     #[test]
     fn a_cube_of_six_half_spaces_by_hand() {
         let p = Polyhedron::new(Transform::IDENTITY, &cube_planes()).unwrap();
-        assert_eq!(p.bounds(), Bounds3::new(Point3::new(-1.0, -1.0, -1.0), Point3::new(1.0, 1.0, 1.0)));
+        assert_eq!(
+            p.bounds(),
+            Bounds3::new(Point3::new(-1.0, -1.0, -1.0), Point3::new(1.0, 1.0, 1.0))
+        );
         let r = Ray::new(Point3::new(-3.0, 0.5, 0.0), Vec3::X);
         let h = p.intersect(&r).unwrap();
         assert_eq!((h.t, h.sub), (2.0, 1));
@@ -225,31 +241,60 @@ mod tests {
         let h = p.intersect(&Ray::new(Point3::ORIGIN, Vec3::Y)).unwrap();
         assert_eq!((h.t, h.sub), (1.0, 2));
         // Parallel outside a slab.
-        assert!(p.intersect(&Ray::new(Point3::new(-3.0, 2.0, 0.0), Vec3::X)).is_none());
+        assert!(p
+            .intersect(&Ray::new(Point3::new(-3.0, 2.0, 0.0), Vec3::X))
+            .is_none());
     }
 
     #[test]
     fn a_tetrahedron_by_hand() {
         // x, y, z ≥ 0 and x + y + z ≤ 1.
-        let planes = [(-Vec3::X, 0.0), (-Vec3::Y, 0.0), (-Vec3::Z, 0.0), (Vec3::new(1.0, 1.0, 1.0), 1.0)];
+        let planes = [
+            (-Vec3::X, 0.0),
+            (-Vec3::Y, 0.0),
+            (-Vec3::Z, 0.0),
+            (Vec3::new(1.0, 1.0, 1.0), 1.0),
+        ];
         let p = Polyhedron::new(Transform::IDENTITY, &planes).unwrap();
         assert!(p.bounds().max.approx_eq(Point3::new(1.0, 1.0, 1.0), 1e-6));
         let r = Ray::new(Point3::new(0.2, 0.2, 5.0), Vec3::new(0.0, 0.0, -1.0));
         let h = p.intersect(&r).unwrap();
         assert!((h.t - 4.4).abs() < 1e-5);
         assert_eq!(h.sub, 3);
-        assert!(p.geometry(&r, h.t, h.sub).n.to_vec().approx_eq(Vec3::new(1.0, 1.0, 1.0).normalize(), 1e-6));
+        assert!(p
+            .geometry(&r, h.t, h.sub)
+            .n
+            .to_vec()
+            .approx_eq(Vec3::new(1.0, 1.0, 1.0).normalize(), 1e-6));
     }
 
     #[test]
     fn invalid_sets_are_rejected() {
-        let open = [(Vec3::X, 1.0), (-Vec3::X, 1.0), (Vec3::Y, 1.0), (-Vec3::Y, 1.0), (Vec3::Z, 1.0)];
-        assert_eq!(Polyhedron::new(Transform::IDENTITY, &open), Err(PolyhedronError::Unbounded));
+        let open = [
+            (Vec3::X, 1.0),
+            (-Vec3::X, 1.0),
+            (Vec3::Y, 1.0),
+            (-Vec3::Y, 1.0),
+            (Vec3::Z, 1.0),
+        ];
+        assert_eq!(
+            Polyhedron::new(Transform::IDENTITY, &open),
+            Err(PolyhedronError::Unbounded)
+        );
         let cone = [(-Vec3::X, 0.0), (-Vec3::Y, 0.0), (-Vec3::Z, 0.0)];
-        assert_eq!(Polyhedron::new(Transform::IDENTITY, &cone), Err(PolyhedronError::Unbounded));
+        assert_eq!(
+            Polyhedron::new(Transform::IDENTITY, &cone),
+            Err(PolyhedronError::Unbounded)
+        );
         let mut empty = cube_planes();
         empty.push((Vec3::X, -2.0));
-        assert_eq!(Polyhedron::new(Transform::IDENTITY, &empty), Err(PolyhedronError::Empty));
-        assert_eq!(Polyhedron::new(Transform::IDENTITY, &[(Vec3::ZERO, 1.0)]), Err(PolyhedronError::BadNormal(0)));
+        assert_eq!(
+            Polyhedron::new(Transform::IDENTITY, &empty),
+            Err(PolyhedronError::Empty)
+        );
+        assert_eq!(
+            Polyhedron::new(Transform::IDENTITY, &[(Vec3::ZERO, 1.0)]),
+            Err(PolyhedronError::BadNormal(0))
+        );
     }
 }

@@ -50,7 +50,12 @@ impl Sphere {
     pub fn intersect(&self, ray: &Ray) -> Option<ShapeHit> {
         let (t0, t1) = self.crossings(ray)?;
         let t = if t0 > ray.tmin { t0 } else { t1 };
-        (t > ray.tmin && t < ray.tmax).then_some(ShapeHit { t, uv: [0.0; 2], sub: 0, leaf: 0 })
+        (t > ray.tmin && t < ray.tmax).then_some(ShapeHit {
+            t,
+            uv: [0.0; 2],
+            sub: 0,
+            leaf: 0,
+        })
     }
 
     /// The surface at a hit found by [`Sphere::intersect`].
@@ -136,8 +141,12 @@ mod tests {
         assert_eq!(h.t, 1.0);
         // The outward normal is kept; integrators orient it.
         assert_eq!(s.geometry(&r, h.t).n, Normal3::new(1.0, 0.0, 0.0));
-        assert!(s.intersect(&Ray::new(Point3::new(0.0, 2.0, 2.0), Vec3::X)).is_none());
-        assert!(s.intersect(&Ray::new(Point3::new(2.0, 0.0, 0.0), Vec3::X)).is_none());
+        assert!(s
+            .intersect(&Ray::new(Point3::new(0.0, 2.0, 2.0), Vec3::X))
+            .is_none());
+        assert!(s
+            .intersect(&Ray::new(Point3::new(2.0, 0.0, 0.0), Vec3::X))
+            .is_none());
     }
 
     #[test]
@@ -148,7 +157,12 @@ mod tests {
         let g = s.geometry(&r, h.t);
         assert_eq!(g.p, Point3::new(10.0, 0.0, 1.0));
         assert_eq!(g.n, Normal3::new(0.0, 0.0, 1.0));
-        assert!(s.intersect(&Ray::new(Point3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.0, -1.0))).is_none());
+        assert!(s
+            .intersect(&Ray::new(
+                Point3::new(0.0, 0.0, 2.0),
+                Vec3::new(0.0, 0.0, -1.0)
+            ))
+            .is_none());
 
         // An ellipsoid stretched along x: its normal is not the radial direction.
         let e = Sphere::new(Transform::scaling(Vec3::new(2.0, 1.0, 1.0)));
@@ -157,7 +171,10 @@ mod tests {
         let expected = Vec3::new(0.5, 0.0, 1.0).normalize();
         assert!(g.n.to_vec().approx_eq(expected, 1e-6));
         let b = e.bounds();
-        assert!(b.min.approx_eq(Point3::new(-2.0, -1.0, -1.0), 1e-6) && b.max.approx_eq(Point3::new(2.0, 1.0, 1.0), 1e-6));
+        assert!(
+            b.min.approx_eq(Point3::new(-2.0, -1.0, -1.0), 1e-6)
+                && b.max.approx_eq(Point3::new(2.0, 1.0, 1.0), 1e-6)
+        );
     }
 
     #[test]

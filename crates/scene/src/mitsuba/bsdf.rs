@@ -259,9 +259,17 @@ impl<'t> Loader<'t> {
                     "nearest" => Filter::Nearest,
                     _ => Filter::Bilinear,
                 };
-                let wrap = match p.choice("wrap_mode", &["repeat", "clamp", "mirror"])?.as_str() {
+                let wrap = match p
+                    .choice("wrap_mode", &["repeat", "clamp", "mirror"])?
+                    .as_str()
+                {
                     "clamp" => Wrap::Clamp,
-                    "mirror" => return Err(p.error(p.pos("wrap_mode"), "wrap_mode 'mirror' is not supported (use repeat or clamp)")),
+                    "mirror" => {
+                        return Err(p.error(
+                            p.pos("wrap_mode"),
+                            "wrap_mode 'mirror' is not supported (use repeat or clamp)",
+                        ))
+                    }
                     _ => Wrap::Repeat,
                 };
                 p.ignore(&["format", "accel"]);
