@@ -61,14 +61,14 @@ fn course_demo_estimators_agree() {
             )
         })
         .collect();
-    let course_settings = IntegratorSettings {
+    let course_settings = || IntegratorSettings {
         num_of_rays: 3,
         rr_depth: Some(3),
         max_depth: Some(12),
         ..Default::default()
     };
     let course: Vec<Image> = (10..16)
-        .map(|s| render_example("course-demo.scene", "path", course_settings.clone(), 8, s))
+        .map(|s| render_example("course-demo.scene", "path", course_settings(), 8, s))
         .collect();
     let (a, ea) = mean_and_error(&nee);
     let (b, eb) = mean_and_error(&course);
