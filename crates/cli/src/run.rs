@@ -5,6 +5,9 @@ use anyhow::{bail, Context, Result};
 use candela_imageio::{Encoding, ToneMap};
 use candela_render::accel::AccelKind;
 use candela_render::integrator::{IntegratorKind, IntegratorSettings};
+use candela_render::radiosity::{
+    CacheStatus, FormFactorMethod, RadiosityOptions, RadiosityOutbox, SolverKind,
+};
 use candela_render::render::{render as render_image, RenderSettings};
 use candela_scene::{LoadOptions, LoadedScene};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -73,6 +76,108 @@ pub fn tone_map(t: &ToneArgs, default_gamma: f32) -> ToneMap {
     }
 }
 
+/// The radiosity options of the command line (`--patch-size`, `--form-factors`, `--solver`,
+/// `--radiosity-cache`); the cache file is read only for the `radiosity` integrator.
+fn radiosity_options(args: &RenderArgs, kind: IntegratorKind) -> Result<RadiosityOptions> {
+    let mut o = RadiosityOptions {
+        seed: args.seed,
+        ..Default::default()
+    };
+    if let Some(h) = args.patch_size {
+        if !(h > 0.0 && h.is_finite()) {
+            bail!("--patch-size '{h}': the patch size must be a positive number");
+        }
+        o.patch_size = Some(h);
+    }
+    if let Some(name) = &args.form_factors {
+        o.form_factors = FormFactorMethod::from_name(name).with_context(|| {
+            format!(
+                "--form-factors '{name}': unknown form-factor method (expected one of: {})",
+                FormFactorMethod::NAMES.join(", ")
+            )
+        })?;
+    }
+    if let Some(name) = &args.solver {
+        o.solver = SolverKind::from_name(name).with_context(|| {
+            format!(
+                "--solver '{name}': unknown radiosity solver (expected one of: {})",
+                SolverKind::NAMES.join(", ")
+            )
+        })?;
+    }
+    if kind == IntegratorKind::Radiosity {
+        o.outbox = Some(RadiosityOutbox::new());
+        if let Some(path) = &args.radiosity_cache {
+            match std::fs::read(path) {
+                Ok(bytes) => o.cache = Some(bytes.into()),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => eprintln!(
+                    "candela: warning: --radiosity-cache '{}': cannot read it ({e}); solving again",
+                    path.display()
+                ),
+            }
+        }
+    }
+    Ok(o)
+}
+
+/// Prints the radiosity warnings (and the report with `--stats`) and saves a computed
+/// solution to `--radiosity-cache`.
+fn radiosity_outcome(o: &RadiosityOptions, args: &RenderArgs) -> Result<()> {
+    let Some(outcome) = o.outbox.as_ref().and_then(|b| b.take()) else {
+        return Ok(());
+    };
+    for w in &outcome.report.warnings {
+        eprintln!("candela: warning: {w}");
+    }
+    if let Some(path) = &args.radiosity_cache {
+        match &outcome.report.cache {
+            CacheStatus::Stale => {
+                eprintln!("candela: --radiosity-cache '{}' does not match this scene and these options: solved again", path.display())
+            }
+            CacheStatus::Invalid(why) => eprintln!(
+                "candela: --radiosity-cache '{}' is invalid ({why}): solved again",
+                path.display()
+            ),
+            CacheStatus::Loaded | CacheStatus::NotUsed => {}
+        }
+    }
+    if args.stats {
+        eprintln!("{}", outcome.report);
+    }
+    if let (Some(path), Some(bytes)) = (&args.radiosity_cache, &outcome.cache_bytes) {
+        write_atomically(path, bytes)
+            .with_context(|| format!("--radiosity-cache '{}': cannot write it", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to a temporary file beside `path`, flushes it and renames it onto `path`; on
+/// failure the temporary file is removed and an existing `path` is left as it was.
+fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write as _;
+    let name = path
+        .file_name()
+        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"))?;
+    let mut temp_name = std::ffi::OsString::from(".");
+    temp_name.push(name);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.subsec_nanos());
+    temp_name.push(format!(".tmp-{}-{nanos}", std::process::id()));
+    let temp = path.with_file_name(temp_name);
+    let result = std::fs::File::create_new(&temp).and_then(|mut f| {
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        drop(f);
+        std::fs::rename(&temp, path)
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&temp);
+    }
+    result
+}
+
 /// The display gamma of rendered LDR images unless `--gamma` says otherwise.
 const RENDER_GAMMA: f32 = 2.2;
 
@@ -90,6 +195,7 @@ fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf],
         num_of_rays: args.num_of_rays.unwrap_or(1),
         rr_depth: hints.rr_depth,
         hide_emitters: hints.hide_emitters,
+        radiosity: radiosity_options(args, kind)?,
     };
     if matches!(kind, IntegratorKind::Path | IntegratorKind::Radiosity) {
         for place in &loaded.local_model_terms {
@@ -99,6 +205,7 @@ fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf],
     let integrator = kind
         .build(&loaded.scene, &integrator_settings)
         .map_err(|e| anyhow::anyhow!("--integrator '{name}': {e}"))?;
+    radiosity_outcome(&integrator_settings.radiosity, args)?;
 
     let settings = RenderSettings {
         width: args.width.or(hints.width).unwrap_or(640) as usize,

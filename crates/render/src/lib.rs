@@ -14,6 +14,7 @@ pub mod interaction;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod radiosity;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -27,7 +27,7 @@ pub trait Integrator: Sync {
 }
 
 /// Settings that integrators read (each ignores what it does not use).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct IntegratorSettings {
     /// Path length limit; `None` or -1: the integrator's default (unlimited for `path`).
     pub max_depth: Option<i32>,
@@ -37,6 +37,8 @@ pub struct IntegratorSettings {
     pub rr_depth: Option<u32>,
     /// Hide directly visible emitters (Mitsuba's `hide_emitters`).
     pub hide_emitters: bool,
+    /// Options of the `radiosity` integrator.
+    pub radiosity: crate::radiosity::RadiosityOptions,
 }
 
 /// The integrators selectable by name.
@@ -75,7 +77,7 @@ impl IntegratorKind {
     }
 
     /// The integrator for `scene`, or why it cannot be built.
-    pub fn build(self, _scene: &Scene, settings: &IntegratorSettings) -> Result<Box<dyn Integrator>, String> {
+    pub fn build(self, scene: &Scene, settings: &IntegratorSettings) -> Result<Box<dyn Integrator>, String> {
         match self {
             IntegratorKind::OnOff => Ok(Box::new(OnOff)),
             IntegratorKind::Flat => Ok(Box::new(Flat)),
@@ -107,7 +109,7 @@ impl IntegratorKind {
                     })
                 })
             }
-            IntegratorKind::Radiosity => Err("not supported yet".to_string()),
+            IntegratorKind::Radiosity => crate::radiosity::build(scene, &settings.radiosity),
         }
     }
 }

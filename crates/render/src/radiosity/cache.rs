@@ -4,7 +4,7 @@
 //! Layout (little-endian): the magic `CNDLRAD\0`, the format version (u32), the fingerprint of
 //! the scene and the options (u64), the number of elements (u32) and of patches (u32), the
 //! elements split by adaptive refinement in order (u32 count, then u32 indices), B per patch
-//! (3 × f64), the solver's iterations (u64), residual (f64) and convergence flag (u8), and an
+//! (3 × f64), whether each patch is hidden (u8), the solver's iterations (u64), residual (f64) and convergence flag (u8), and an
 //! FNV-1a checksum (u64) of everything before it.
 //!
 //! Loading re-meshes the scene (deterministic), replays the splits and checks the counts; the
@@ -17,7 +17,7 @@ use crate::scene::Scene;
 use std::fmt::Write as _;
 
 const MAGIC: &[u8; 8] = b"CNDLRAD\0";
-const VERSION: u32 = 1;
+const VERSION: u32 = 2;
 
 /// FNV-1a, 64 bits: a stable hash (unlike `std`'s, it does not change between Rust releases).
 #[derive(Clone, Copy, Debug)]
@@ -60,7 +60,7 @@ pub(crate) fn fingerprint(scene: &Scene, opts: &RadiosityOptions, patch_size: f3
     h.f32(patch_size);
     let _ = write!(
         h,
-        "{:?}{:?}{}{}{}{}{}{}{}{}",
+        "{:?}{:?}{}{}{}{}{}{}{}{}{}",
         opts.form_factors,
         opts.solver,
         opts.threshold,
@@ -70,7 +70,8 @@ pub(crate) fn fingerprint(scene: &Scene, opts: &RadiosityOptions, patch_size: f3
         opts.refinements,
         opts.refine_threshold,
         opts.max_patches,
-        opts.cull_hidden_sides
+        opts.cull_hidden_sides,
+        opts.reciprocal_gather
     );
     h.u64(opts.seed);
     let geo = &scene.geometry;
@@ -100,7 +101,11 @@ pub(crate) fn fingerprint(scene: &Scene, opts: &RadiosityOptions, patch_size: f3
         }
         let _ = write!(h, "{:?}", m.props);
     }
-    let _ = write!(h, "{:?}{:?}{:?}{:?}", scene.materials, scene.emissions, scene.lights, scene.background);
+    let _ = write!(
+        h,
+        "{:?}{:?}{:?}{:?}",
+        scene.materials, scene.emissions, scene.lights, scene.background
+    );
     h.0
 }
 
@@ -112,6 +117,8 @@ pub(crate) struct CacheData {
     pub patches: u32,
     pub splits: Vec<u32>,
     pub b: Vec<[f64; 3]>,
+    /// Patches whose centre is hidden (display weights).
+    pub hidden: Vec<bool>,
     pub iterations: u64,
     pub residual: f64,
     pub converged: bool,
@@ -143,6 +150,7 @@ pub(crate) fn encode(d: &CacheData) -> Vec<u8> {
             out.extend_from_slice(&c.to_le_bytes());
         }
     }
+    out.extend(d.hidden.iter().map(|&h| h as u8));
     out.extend_from_slice(&d.iterations.to_le_bytes());
     out.extend_from_slice(&d.residual.to_le_bytes());
     out.push(d.converged as u8);
@@ -160,16 +168,24 @@ struct Reader<'a> {
 
 impl Reader<'_> {
     fn take(&mut self, n: usize) -> Result<&[u8], CacheError> {
-        let end = self.at.checked_add(n).filter(|&e| e <= self.b.len()).ok_or_else(|| CacheError::Invalid("truncated".into()))?;
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&e| e <= self.b.len())
+            .ok_or_else(|| CacheError::Invalid("truncated".into()))?;
         let s = &self.b[self.at..end];
         self.at = end;
         Ok(s)
     }
     fn u32(&mut self) -> Result<u32, CacheError> {
-        Ok(u32::from_le_bytes(self.take(4)?.try_into().unwrap_or([0; 4])))
+        Ok(u32::from_le_bytes(
+            self.take(4)?.try_into().unwrap_or([0; 4]),
+        ))
     }
     fn u64(&mut self) -> Result<u64, CacheError> {
-        Ok(u64::from_le_bytes(self.take(8)?.try_into().unwrap_or([0; 8])))
+        Ok(u64::from_le_bytes(
+            self.take(8)?.try_into().unwrap_or([0; 8]),
+        ))
     }
     fn f64(&mut self) -> Result<f64, CacheError> {
         Ok(f64::from_bits(self.u64()?))
@@ -185,7 +201,9 @@ pub(crate) fn decode(bytes: &[u8], fingerprint: u64) -> Result<CacheData, CacheE
     let mut h = Fnv::default();
     h.bytes(body);
     if h.0.to_le_bytes() != bytes[bytes.len() - 8..] {
-        return Err(CacheError::Invalid("checksum mismatch (corrupt file)".into()));
+        return Err(CacheError::Invalid(
+            "checksum mismatch (corrupt file)".into(),
+        ));
     }
     let mut r = Reader { b: body, at: 8 };
     let version = r.u32()?;
@@ -210,6 +228,7 @@ pub(crate) fn decode(bytes: &[u8], fingerprint: u64) -> Result<CacheData, CacheE
     for _ in 0..patches {
         b.push([r.f64()?, r.f64()?, r.f64()?]);
     }
+    let hidden = r.take(patches as usize)?.iter().map(|&x| x != 0).collect();
     let iterations = r.u64()?;
     let residual = r.f64()?;
     let converged = r.take(1)?[0] != 0;
@@ -225,8 +244,53 @@ pub(crate) fn decode(bytes: &[u8], fingerprint: u64) -> Result<CacheData, CacheE
         patches,
         splits,
         b,
+        hidden,
         iterations,
         residual,
         converged,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn data() -> CacheData {
+        CacheData {
+            fingerprint: 42,
+            elements: 7,
+            patches: 2,
+            splits: vec![3, 5],
+            b: vec![[1.0, 2.0, 3.0], [0.5, 0.25, 0.125]],
+            hidden: vec![false, true],
+            iterations: 9,
+            residual: 1e-5,
+            converged: true,
+        }
+    }
+
+    #[test]
+    fn bytes_round_trip() {
+        let d = data();
+        assert_eq!(decode(&encode(&d), 42), Ok(d));
+    }
+
+    #[test]
+    fn stale_and_corrupt_bytes_are_told_apart() {
+        let bytes = encode(&data());
+        assert_eq!(decode(&bytes, 43), Err(CacheError::Stale));
+        for k in [0, 9, 20, bytes.len() / 2, bytes.len() - 1] {
+            let mut bad = bytes.clone();
+            bad[k] ^= 1;
+            assert!(
+                matches!(decode(&bad, 42), Err(CacheError::Invalid(_))),
+                "byte {k}"
+            );
+        }
+        assert!(matches!(
+            decode(&bytes[..bytes.len() - 3], 42),
+            Err(CacheError::Invalid(_))
+        ));
+        assert!(matches!(decode(b"", 42), Err(CacheError::Invalid(_))));
+    }
 }

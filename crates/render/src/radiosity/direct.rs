@@ -69,7 +69,8 @@ pub(crate) fn direct_sources(scene: &Scene, mesh: &Meshing, seed: u64) -> Vec<[f
                     e[2] += (s.li.b * w) as f64;
                 }
                 if !scene.background.is_black() {
-                    let d = Frame::from_normal(nn).to_world(warp::square_to_cosine_hemisphere(cmj(k, POINTS, !pattern)));
+                    let d = Frame::from_normal(nn)
+                        .to_world(warp::square_to_cosine_hemisphere(cmj(k, POINTS, !pattern)));
                     if scene.intersect(&Ray::spawn(x, nn, d), &mut stats).is_none() {
                         // E = ∫ L cos dω estimated with the density cos/π.
                         let bg = scene.background;
@@ -80,7 +81,11 @@ pub(crate) fn direct_sources(scene: &Scene, mesh: &Meshing, seed: u64) -> Vec<[f
                 }
             }
             let k = 1.0 / POINTS as f64;
-            [p.rho[0] * e[0] * k, p.rho[1] * e[1] * k, p.rho[2] * e[2] * k]
+            [
+                p.rho[0] * e[0] * k,
+                p.rho[1] * e[1] * k,
+                p.rho[2] * e[2] * k,
+            ]
         })
         .collect()
 }

@@ -35,29 +35,20 @@ pub(crate) struct Shading {
 
 /// Quantised position key.
 fn key(p: Point3, q: f32) -> (i64, i64, i64) {
-    ((p.x / q).round() as i64, (p.y / q).round() as i64, (p.z / q).round() as i64)
+    (
+        (p.x / q).round() as i64,
+        (p.y / q).round() as i64,
+        (p.z / q).round() as i64,
+    )
 }
 
 /// Reflected radiosity per corner of every patch, averaged over the patches touching each
-/// corner (f64, per channel).
-pub(crate) fn corner_values(mesh: &Meshing, r: &[[f64; 3]]) -> Vec<[[f64; 3]; 4]> {
+/// corner (f64, per channel). Hidden patches (whose centre is covered, e.g. by a box standing
+/// on them: see `Row::occluded`) count only where no visible patch touches the corner, so that
+/// their darkness does not spread onto their visible neighbours.
+pub(crate) fn corner_values(mesh: &Meshing, r: &[[f64; 3]], hidden: &[bool]) -> Vec<[[f64; 3]; 4]> {
     let q = (mesh.scale * 1e-5).max(f32::MIN_POSITIVE);
-    let max_level = mesh.elements.iter().map(|e| e.level).max().unwrap_or(0);
-    // Every patch registers at its corners and at the points of its edges where finer
-    // neighbours may have corners.
-    let mut at: HashMap<(i64, i64, i64), Vec<u32>> = HashMap::new();
-    for (i, p) in mesh.patches.iter().enumerate() {
-        let e = &mesh.elements[p.elem as usize];
-        let nv = e.nverts as usize;
-        let steps = 1u32 << (max_level - e.level).min(6);
-        for k in 0..nv {
-            let (a, b) = (e.corners[k], e.corners[(k + 1) % nv]);
-            for s in 0..steps {
-                let pt = a.lerp(b, s as f32 / steps as f32);
-                at.entry(key(pt, q)).or_default().push(i as u32);
-            }
-        }
-    }
+    let at = vertex_map(mesh, q);
     let mut out = Vec::with_capacity(mesh.patches.len());
     for (i, p) in mesh.patches.iter().enumerate() {
         let e = &mesh.elements[p.elem as usize];
@@ -76,10 +67,15 @@ pub(crate) fn corner_values(mesh: &Meshing, r: &[[f64; 3]]) -> Vec<[[f64; 3]; 4]
                     if mesh.patches[j as usize].normal.dot(p.normal) < CREASE_COS {
                         continue;
                     }
+                    let wj = if hidden.get(j as usize).copied().unwrap_or(false) {
+                        1e-6
+                    } else {
+                        1.0
+                    };
                     for c in 0..3 {
-                        sum[c] += r[j as usize][c];
+                        sum[c] += wj * r[j as usize][c];
                     }
-                    w += 1.0;
+                    w += wj;
                 }
             }
             *vk = if w > 0.0 { sum.map(|s| s / w) } else { r[i] };
@@ -92,11 +88,62 @@ pub(crate) fn corner_values(mesh: &Meshing, r: &[[f64; 3]]) -> Vec<[[f64; 3]; 4]
     out
 }
 
+/// The patches touching each point: every patch registers at its corners and at the points of
+/// its edges where finer neighbours may have corners.
+fn vertex_map(mesh: &Meshing, q: f32) -> HashMap<(i64, i64, i64), Vec<u32>> {
+    let max_level = mesh.elements.iter().map(|e| e.level).max().unwrap_or(0);
+    let mut at: HashMap<(i64, i64, i64), Vec<u32>> = HashMap::new();
+    for (i, p) in mesh.patches.iter().enumerate() {
+        let e = &mesh.elements[p.elem as usize];
+        let nv = e.nverts as usize;
+        let steps = 1u32 << (max_level - e.level).min(6);
+        for k in 0..nv {
+            let (a, b) = (e.corners[k], e.corners[(k + 1) % nv]);
+            for s in 0..steps {
+                let pt = a.lerp(b, s as f32 / steps as f32);
+                at.entry(key(pt, q)).or_default().push(i as u32);
+            }
+        }
+    }
+    at
+}
+
+/// Per patch: true when a corner is shared with a visible patch of the same orientation while
+/// the patch itself is hidden (the edge of the region under a box or behind a light).
+pub(crate) fn hidden_boundary(mesh: &Meshing, hidden: &[bool]) -> Vec<bool> {
+    let q = (mesh.scale * 1e-5).max(f32::MIN_POSITIVE);
+    let at = vertex_map(mesh, q);
+    mesh.patches
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            if !hidden.get(i).copied().unwrap_or(false) {
+                return false;
+            }
+            let e = &mesh.elements[p.elem as usize];
+            e.corners[..e.nverts as usize].iter().any(|c| {
+                at.get(&key(*c, q)).is_some_and(|list| {
+                    list.iter().any(|&j| {
+                        !hidden.get(j as usize).copied().unwrap_or(false)
+                            && mesh.patches[j as usize].normal.dot(p.normal) >= CREASE_COS
+                    })
+                })
+            })
+        })
+        .collect()
+}
+
 impl Shading {
     /// Display values from the reflected radiosity R of every patch.
-    pub fn new(mesh: &Meshing, r: &[[f64; 3]]) -> Self {
-        let cv = corner_values(mesh, r);
-        let to = |x: [f64; 3]| Rgb::new((x[0] / std::f64::consts::PI) as f32, (x[1] / std::f64::consts::PI) as f32, (x[2] / std::f64::consts::PI) as f32);
+    pub fn new(mesh: &Meshing, r: &[[f64; 3]], hidden: &[bool]) -> Self {
+        let cv = corner_values(mesh, r, hidden);
+        let to = |x: [f64; 3]| {
+            Rgb::new(
+                (x[0] / std::f64::consts::PI) as f32,
+                (x[1] / std::f64::consts::PI) as f32,
+                (x[2] / std::f64::consts::PI) as f32,
+            )
+        };
         Self {
             corners: cv.iter().map(|c| c.map(to)).collect(),
             flat: r.iter().map(|&x| to(x)).collect(),
@@ -112,7 +159,10 @@ impl Shading {
         if e.nverts == 3 {
             c[0] * (1.0 - a - b).max(0.0) + c[1] * a + c[2] * b
         } else {
-            c[0] * ((1.0 - a) * (1.0 - b)) + c[1] * (a * (1.0 - b)) + c[2] * (a * b) + c[3] * ((1.0 - a) * b)
+            c[0] * ((1.0 - a) * (1.0 - b))
+                + c[1] * (a * (1.0 - b))
+                + c[2] * (a * b)
+                + c[3] * ((1.0 - a) * b)
         }
     }
 }
@@ -136,18 +186,35 @@ pub(crate) struct Display {
 impl Display {
     /// The reflected radiance stored for a diffuse hit (patch lookup and interpolation);
     /// `None` when the hit has no patch on its side.
-    fn stored(&self, mesh: &Meshing, hit: &crate::interaction::Hit, si: &crate::interaction::SurfaceInteraction, gouraud: bool) -> Option<Rgb> {
+    fn stored(
+        &self,
+        mesh: &Meshing,
+        hit: &crate::interaction::Hit,
+        si: &crate::interaction::SurfaceInteraction,
+        gouraud: bool,
+    ) -> Option<Rgb> {
         let (e, loc) = mesh.locate(hit, si)?;
         let side = if si.n.dot_vec(si.wo) > 0.0 { 0 } else { 1 };
         let p = mesh.elements[e as usize].patch[side];
         if p == NONE {
             return None;
         }
-        Some(if gouraud { self.shading.gouraud(mesh, p, loc) } else { self.shading.flat[p as usize] })
+        Some(if gouraud {
+            self.shading.gouraud(mesh, p, loc)
+        } else {
+            self.shading.flat[p as usize]
+        })
     }
 
     /// The radiance along a camera ray.
-    pub fn radiance(&self, mesh: &Meshing, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    pub fn radiance(
+        &self,
+        mesh: &Meshing,
+        scene: &Scene,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         let mut l = Rgb::BLACK;
         let mut beta = Rgb::WHITE;
         let mut ray = *camera_ray;
@@ -164,7 +231,7 @@ impl Display {
                 let Some(s) = bsdf.sample(si.wo, sampler.next_1d(), sampler.next_2d()) else {
                     break;
                 };
-                beta = beta * s.weight;
+                beta *= s.weight;
                 if beta.is_black() {
                     break;
                 }
@@ -185,13 +252,22 @@ impl Display {
     }
 
     /// One final-gather bounce at a diffuse point.
-    fn gather(&self, mesh: &Meshing, scene: &Scene, si: &crate::interaction::SurfaceInteraction, n: u32, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb {
+    fn gather(
+        &self,
+        mesh: &Meshing,
+        scene: &Scene,
+        si: &crate::interaction::SurfaceInteraction,
+        n: u32,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
         let mat = &scene.materials[si.props.material as usize];
         let bsdf = mat.bsdf(si.shading_frame(), si.uv);
         let mut l = Rgb::BLACK;
         // Direct light: one sample of every light.
         for light in &scene.lights {
-            let Some(s) = light.sample(&scene.geometry, &scene.emissions, si.p, sampler.next_2d()) else {
+            let Some(s) = light.sample(&scene.geometry, &scene.emissions, si.p, sampler.next_2d())
+            else {
                 continue;
             };
             let f = bsdf.eval(si.wo, s.wi);

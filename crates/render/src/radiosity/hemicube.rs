@@ -2,7 +2,7 @@
 //!
 //! A half cube of side 2 stands on the patch's centre, its top face at height 1 along the
 //! normal and four half faces around it, each cut into pixels: `res × res` on the top,
-//! `res × res/2` on each side (`--hemicube-resolution`, default 256). Each pixel carries its
+//! `res × res/2` on each side (`RadiosityOptions::hemicube_resolution`, default 128). Each pixel carries its
 //! *delta form factor*, the form factor from the differential patch to the pixel:
 //! ΔF = ΔA / (π (x² + y² + 1)²) on the top face (pixel centre (x, y, 1)) and
 //! ΔF = z ΔA / (π (y² + z² + 1)²) on a side face (pixel centre (1, y, z)), with ΔA = (2/res)²;
@@ -59,7 +59,10 @@ impl Raster {
                 mid += c.to_vec();
             }
             let mid = (mid / n as f32).to_point();
-            let radius = e.corners[..n].iter().map(|c| c.distance(mid)).fold(0.0, f32::max);
+            let radius = e.corners[..n]
+                .iter()
+                .map(|c| c.distance(mid))
+                .fold(0.0, f32::max);
             elems.push(RasterElem {
                 v: e.corners,
                 nv: e.nverts,
@@ -134,7 +137,14 @@ impl Hemicube {
     }
 
     /// Row `i` of the form-factor matrix: F_ij for every patch j seen from patch i's centre.
-    pub fn row(&self, raster: &Raster, mesh: &Meshing, i: u32, scratch: &mut HemicubeScratch, acc: &mut RowAcc) -> Row {
+    pub fn row(
+        &self,
+        raster: &Raster,
+        mesh: &Meshing,
+        i: u32,
+        scratch: &mut HemicubeScratch,
+        acc: &mut RowAcc,
+    ) -> Row {
         let p = &mesh.patches[i as usize];
         let (c, n) = (p.centre, p.normal);
         let frame = Frame::from_normal(n.to_normal());
@@ -174,26 +184,37 @@ impl Hemicube {
             let pl = frame.to_local(re.pn);
             // The plane n·x = kk in local coordinates (kk ≠ 0 since the eye is off the plane).
             let kk = -k;
+            // The outcodes of all five faces at once (5 bits per face).
+            let (mut all_and, mut all_or) = (u32::MAX, 0u32);
+            for q in &local[..nv] {
+                let c = all_outcodes(q, eps);
+                all_and &= c;
+                all_or |= c;
+            }
             for face in 0..5usize {
-                let map = |q: [f32; 3]| -> [f32; 3] {
-                    match face {
-                        0 => [q[0], q[1], q[2]],
-                        1 => [q[1], q[2], q[0]],
-                        2 => [q[1], q[2], -q[0]],
-                        3 => [q[0], q[2], q[1]],
-                        _ => [q[0], q[2], -q[1]],
-                    }
-                };
+                if (all_and >> (5 * face)) & 0x1f != 0 {
+                    continue;
+                }
+                let or = ((all_or >> (5 * face)) & 0x1f) as u8;
+                let top = face == 0;
                 let mut poly = [[0f32; 3]; 12];
                 for (dst, src) in poly.iter_mut().zip(&local[..nv]) {
-                    *dst = map(*src);
+                    *dst = to_face(face, *src);
                 }
-                let nf = map([pl.x, pl.y, pl.z]);
-                let top = face == 0;
-                let Some(count) = clip(&mut poly, nv, eps, top) else {
-                    continue;
+                let count = if or == 0 {
+                    nv
+                } else {
+                    clip(&mut poly, nv, eps, top, or)
                 };
-                let (offset, rows) = if top { (0, res) } else { (res * res + (face - 1) * res * half, half) };
+                if count < 3 {
+                    continue;
+                }
+                let nf = to_face(face, [pl.x, pl.y, pl.z]);
+                let (offset, rows) = if top {
+                    (0, res)
+                } else {
+                    (res * res + (face - 1) * res * half, half)
+                };
                 raster_polygon(
                     &poly[..count],
                     [nf[0] / kk, nf[1] / kk, nf[2] / kk],
@@ -206,87 +227,164 @@ impl Hemicube {
                 );
             }
         }
-        // Sum the delta form factors per patch.
+        // Sum the delta form factors per patch (runs of equal items first), and those of
+        // absorbers and of surfaces nearer than half the patch size (1/depth above w_near).
         let top_px = res * res;
-        for (px, &it) in scratch.item.iter().enumerate() {
-            if it >= ABSORBER {
-                continue;
+        let side_px = res * half;
+        let w_near = 2.0 / mesh.patch_size.max(eps);
+        let mut occluded = 0f64;
+        let mut add_face = |items: &[u32], ws: &[f32], table: &[f32]| {
+            let (mut cur, mut sum) = (EMPTY, 0f64);
+            for ((&it, &df), &w) in items.iter().zip(table).zip(ws) {
+                if it == ABSORBER || (it != EMPTY && w > w_near) {
+                    occluded += df as f64;
+                }
+                if it != cur {
+                    if cur < ABSORBER {
+                        acc.add(cur, sum);
+                    }
+                    cur = it;
+                    sum = 0.0;
+                }
+                sum += df as f64;
             }
-            let df = if px < top_px {
-                self.top[px]
-            } else {
-                self.side[(px - top_px) % (res * half)]
-            };
-            acc.add(it, df as f64);
+            if cur < ABSORBER {
+                acc.add(cur, sum);
+            }
+        };
+        add_face(&scratch.item[..top_px], &scratch.w[..top_px], &self.top);
+        for f in 0..4 {
+            let off = top_px + f * side_px;
+            add_face(
+                &scratch.item[off..off + side_px],
+                &scratch.w[off..off + side_px],
+                &self.side,
+            );
         }
-        acc.finish()
+        let mut row = acc.finish();
+        row.occluded = occluded as f32;
+        row
     }
 }
 
-/// Clips the polygon `poly[..n]` (face coordinates (a, b, d)) to the face's frustum
-/// d ≥ eps, |a| ≤ d, b ≤ d and b ≥ −d (top) or b ≥ 0 (sides). Returns the new vertex count.
-fn clip(poly: &mut [[f32; 3]; 12], n: usize, eps: f32, top: bool) -> Option<usize> {
-    // Plane functions: inside when ≥ 0.
-    let planes: [fn(&[f32; 3], f32, bool) -> f32; 5] = [
-        |p, e, _| p[2] - e,
-        |p, _, _| p[2] - p[0],
-        |p, _, _| p[2] + p[0],
-        |p, _, _| p[2] - p[1],
-        |p, _, t| if t { p[2] + p[1] } else { p[1] },
-    ];
-    // Trivial accept/reject by outcodes.
-    let mut all_in = true;
-    for f in &planes {
-        let mut any_in = false;
-        let mut any_out = false;
-        for p in &poly[..n] {
-            if f(p, eps, top) >= 0.0 {
-                any_in = true;
+/// Local coordinates (x, y, z) to the coordinates (a, b, d) of a face: the top looks along
+/// +z; the sides along ±x and ±y, with b the height above the tangent plane.
+#[inline]
+fn to_face(face: usize, q: [f32; 3]) -> [f32; 3] {
+    match face {
+        0 => [q[0], q[1], q[2]],
+        1 => [q[1], q[2], q[0]],
+        2 => [q[1], q[2], -q[0]],
+        3 => [q[0], q[2], q[1]],
+        _ => [q[0], q[2], -q[1]],
+    }
+}
+
+/// The value of clipping plane `k` at `p` (inside when ≥ 0): d ≥ eps, a ≤ d, −a ≤ d, b ≤ d,
+/// and −b ≤ d (top) or b ≥ 0 (sides).
+#[inline]
+fn plane(k: u32, p: &[f32; 3], eps: f32, top: bool) -> f32 {
+    match k {
+        0 => p[2] - eps,
+        1 => p[2] - p[0],
+        2 => p[2] + p[0],
+        3 => p[2] - p[1],
+        _ => {
+            if top {
+                p[2] + p[1]
             } else {
-                any_out = true;
+                p[1]
             }
         }
-        if !any_in {
-            return None;
-        }
-        all_in &= !any_out;
     }
-    if all_in {
-        return Some(n);
+}
+
+/// The bits of the clipping planes that `p` is outside of (see [`all_outcodes`]).
+#[cfg(test)]
+fn outcode(p: &[f32; 3], eps: f32, top: bool) -> u8 {
+    let mut c = 0u8;
+    for k in 0..5 {
+        c |= ((plane(k, p, eps, top) < 0.0) as u8) << k;
     }
+    c
+}
+
+/// The outcodes of the local point `q` for the five faces, face f in bits 5f..5f+5 (the same
+/// bits as [`outcode`] of the face coordinates).
+#[inline]
+fn all_outcodes(q: &[f32; 3], eps: f32) -> u32 {
+    let [x, y, z] = *q;
+    let b = |c: bool, k: u32| (c as u32) << k;
+    let side = |d: f32, a: f32, f: u32| -> u32 {
+        let o = 5 * f;
+        b(d < eps, o) | b(a > d, o + 1) | b(-a > d, o + 2) | b(z > d, o + 3) | b(z < 0.0, o + 4)
+    };
+    let top = b(z < eps, 0) | b(x > z, 1) | b(-x > z, 2) | b(y > z, 3) | b(-y > z, 4);
+    top | side(x, y, 1) | side(-x, y, 2) | side(y, x, 3) | side(-y, x, 4)
+}
+
+/// Clips the polygon `poly[..n]` (face coordinates) by the planes whose bits are in `planes`.
+/// Returns the new vertex count (< 3: nothing left).
+fn clip(poly: &mut [[f32; 3]; 12], n: usize, eps: f32, top: bool, planes: u8) -> usize {
     let mut n = n;
     let mut tmp = [[0f32; 3]; 12];
-    for f in &planes {
+    for k in 0..5u32 {
+        if planes & (1 << k) == 0 {
+            continue;
+        }
         let mut m = 0;
         for i in 0..n {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            let (fa, fb) = (f(&a, eps, top), f(&b, eps, top));
-            if fa >= 0.0 {
-                if m < 12 {
-                    tmp[m] = a;
-                    m += 1;
-                }
+            let (a, b) = (poly[i], poly[if i + 1 == n { 0 } else { i + 1 }]);
+            let (fa, fb) = (plane(k, &a, eps, top), plane(k, &b, eps, top));
+            if fa >= 0.0 && m < 12 {
+                tmp[m] = a;
+                m += 1;
             }
-            if (fa >= 0.0) != (fb >= 0.0) {
+            if (fa >= 0.0) != (fb >= 0.0) && m < 12 {
                 let t = fa / (fa - fb);
-                if m < 12 {
-                    tmp[m] = [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t];
-                    m += 1;
-                }
+                tmp[m] = [
+                    a[0] + (b[0] - a[0]) * t,
+                    a[1] + (b[1] - a[1]) * t,
+                    a[2] + (b[2] - a[2]) * t,
+                ];
+                m += 1;
             }
         }
         if m < 3 {
-            return None;
+            return 0;
         }
         poly[..m].copy_from_slice(&tmp[..m]);
         n = m;
     }
-    Some(n)
+    n
+}
+
+/// ⌈x⌉ without a libm call (x within the i32 range).
+#[inline]
+fn ceil_i(x: f32) -> i32 {
+    let i = x as i32;
+    i + ((i as f32) < x) as i32
+}
+
+/// ⌊x⌋ without a libm call (x within the i32 range).
+#[inline]
+fn floor_i(x: f32) -> i32 {
+    let i = x as i32;
+    i - ((i as f32) > x) as i32
 }
 
 /// Rasterises a clipped convex polygon into one face: pixels whose centre is inside get the
 /// item when the polygon's 1/depth `w = plane·(sa, sb, 1)` is larger than the stored one.
-fn raster_polygon(poly: &[[f32; 3]], plane: [f32; 3], res: usize, rows: usize, top: bool, wbuf: &mut [f32], ibuf: &mut [u32], item: u32) {
+fn raster_polygon(
+    poly: &[[f32; 3]],
+    plane: [f32; 3],
+    res: usize,
+    rows: usize,
+    top: bool,
+    wbuf: &mut [f32],
+    ibuf: &mut [u32],
+    item: u32,
+) {
     let d = 2.0 / res as f32;
     let inv_d = res as f32 / 2.0;
     // Pixel coordinates.
@@ -304,18 +402,18 @@ fn raster_polygon(poly: &[[f32; 3]], plane: [f32; 3], res: usize, rows: usize, t
     if !(ymin.is_finite() && ymax.is_finite()) {
         return;
     }
-    let j0 = ((ymin - 0.5).ceil().max(0.0)) as usize;
-    let j1 = ((ymax - 0.5).floor()).min(rows as f32 - 1.0);
-    if j1 < 0.0 {
+    let j0 = ceil_i((ymin - 0.5).max(0.0)).max(0) as usize;
+    let j1 = floor_i((ymax - 0.5).min(rows as f32 - 1.0));
+    if j1 < 0 {
         return;
     }
-    let j1 = j1 as usize;
+    let j1 = (j1 as usize).min(rows - 1);
     let boff = if top { -1.0 } else { 0.0 };
-    for j in j0..=j1.min(rows - 1) {
+    for j in j0..=j1 {
         let yc = j as f32 + 0.5;
         let (mut xl, mut xr) = (f32::INFINITY, f32::NEG_INFINITY);
         for k in 0..n {
-            let (a, b) = (pts[k], pts[(k + 1) % n]);
+            let (a, b) = (pts[k], pts[if k + 1 == n { 0 } else { k + 1 }]);
             if (a[1] <= yc && yc < b[1]) || (b[1] <= yc && yc < a[1]) {
                 let x = a[0] + (b[0] - a[0]) * ((yc - a[1]) / (b[1] - a[1]));
                 xl = xl.min(x);
@@ -325,23 +423,23 @@ fn raster_polygon(poly: &[[f32; 3]], plane: [f32; 3], res: usize, rows: usize, t
         if !(xl < xr) {
             continue;
         }
-        let i0 = (xl - 0.5).ceil().max(0.0) as usize;
-        let i1 = ((xr - 0.5).ceil()).min(res as f32);
-        if i1 <= 0.0 {
+        let i0 = ceil_i((xl - 0.5).clamp(0.0, res as f32)) as usize;
+        let i1 = ceil_i((xr - 0.5).clamp(0.0, res as f32)) as usize;
+        if i1 <= i0 {
             continue;
         }
-        let i1 = i1 as usize;
         let sb = yc * d + boff;
         let row = j * res;
         let wb = plane[1] * sb + plane[2];
-        for i in i0..i1 {
-            let sa = (i as f32 + 0.5) * d - 1.0;
-            let w = plane[0] * sa + wb;
-            let px = row + i;
-            if w > wbuf[px] {
-                wbuf[px] = w;
-                ibuf[px] = item;
-            }
+        // Branch-free depth test over the span (vectorises).
+        let ws = &mut wbuf[row + i0..row + i1];
+        let is = &mut ibuf[row + i0..row + i1];
+        let (w0, dw) = (plane[0] * ((i0 as f32 + 0.5) * d - 1.0) + wb, plane[0] * d);
+        for (k, (wp, ip)) in ws.iter_mut().zip(is.iter_mut()).enumerate() {
+            let w = w0 + dw * k as f32;
+            let nearer = w > *wp;
+            *wp = if nearer { w } else { *wp };
+            *ip = if nearer { item } else { *ip };
         }
     }
 }
@@ -349,5 +447,78 @@ fn raster_polygon(poly: &[[f32; 3]], plane: [f32; 3], res: usize, rows: usize, t
 /// The total of a hemicube's delta form factors (1 after normalisation), for tests.
 #[allow(dead_code)]
 pub(crate) fn table_total(h: &Hemicube) -> f64 {
-    h.top.iter().map(|&x| x as f64).sum::<f64>() + 4.0 * h.side.iter().map(|&x| x as f64).sum::<f64>()
+    h.top.iter().map(|&x| x as f64).sum::<f64>()
+        + 4.0 * h.side.iter().map(|&x| x as f64).sum::<f64>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn delta_form_factors_sum_to_one_and_follow_the_cosine_law() {
+        for res in [8, 64, 255] {
+            let h = Hemicube::new(res);
+            assert_eq!(h.res % 2, 0);
+            assert!((table_total(&h) - 1.0).abs() < 1e-5);
+            // The top face's share is the form factor to a square of half side 1 at height 1.
+            let top: f64 = h.top.iter().map(|&x| x as f64).sum();
+            let exact = {
+                // Parallel squares 2 × 2 at distance 1 from a point: 4·(1/(2π))·(a/√(1+a²))·atan(b/√(1+a²)) for
+                // the quarter a = b = 1.
+                let r = 2f64.sqrt();
+                4.0 / (2.0 * std::f64::consts::PI) * (1.0 / r) * (1.0 / r).atan() * 2.0
+            };
+            if res >= 64 {
+                assert!(
+                    (top - exact).abs() < 2e-3,
+                    "{res}: top {top}, exact {exact}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn clipping_keeps_what_is_inside_the_frustum() {
+        // A square straddling the top face's edge a = d at depth 1.
+        let mut poly = [[0f32; 3]; 12];
+        poly[..4].copy_from_slice(&[
+            [0.5, -0.5, 1.0],
+            [1.5, -0.5, 1.0],
+            [1.5, 0.5, 1.0],
+            [0.5, 0.5, 1.0],
+        ]);
+        let codes: Vec<u8> = poly[..4].iter().map(|p| outcode(p, 1e-6, true)).collect();
+        let or = codes.iter().fold(0, |a, &c| a | c);
+        let n = clip(&mut poly, 4, 1e-6, true, or);
+        assert_eq!(n, 4);
+        assert!(poly[..n]
+            .iter()
+            .all(|p| p[0] <= 1.0 + 1e-6 && p[0] >= 0.5 - 1e-6));
+        // Below the base of a side face: nothing left.
+        let mut poly = [[0f32; 3]; 12];
+        poly[..3].copy_from_slice(&[[0.0, -0.5, 1.0], [0.5, -0.2, 1.0], [0.2, -0.1, 1.0]]);
+        let and = poly[..3]
+            .iter()
+            .fold(0x1f, |a, p| a & outcode(p, 1e-6, false));
+        assert_ne!(and, 0);
+        assert_eq!(
+            (ceil_i(-1.5), ceil_i(1.2), floor_i(-1.5), floor_i(1.0)),
+            (-1, 2, -2, 1)
+        );
+        // The five faces' outcodes at once agree with each face's own.
+        let mut rng = crate::sampling::Pcg32::new(3, 4);
+        for _ in 0..10_000 {
+            let q = [
+                rng.next_f32() * 4.0 - 2.0,
+                rng.next_f32() * 4.0 - 2.0,
+                rng.next_f32() * 4.0 - 2.0,
+            ];
+            let all = all_outcodes(&q, 1e-3);
+            for face in 0..5 {
+                let own = outcode(&to_face(face, q), 1e-3, face == 0) as u32;
+                assert_eq!((all >> (5 * face)) & 0x1f, own, "{q:?} face {face}");
+            }
+        }
+    }
 }

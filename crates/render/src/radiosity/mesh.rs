@@ -2,7 +2,8 @@
 //!
 //! Every shape becomes one or more *surfaces*: a map from a parameter domain to the shape's
 //! world-space surface (parallelogram: (s, t); box: one surface per face; sphere: latitude and
-//! longitude; disk: radius and angle; plane: a square clipped around the scene; convex
+//! longitude; disk: radius and angle; plane: a square 20 times the scene's size (or the plane's
+//! distance to it) in 32 × 32 cells growing geometrically away from the scene; convex
 //! polyhedron: the fan triangles of each face polygon; mesh: one surface per triangle, with its
 //! barycentrics). A surface is cut into a grid of root *elements* no larger than the patch size
 //! (triangles: by repeated 4-way midpoint splits), and elements are split again by the adaptive
@@ -35,17 +36,35 @@ use crate::stats::RayStats;
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) enum SurfaceMap {
     /// `p + s·v + t·w`.
-    Parallelogram { p: Point3, v: Vec3, w: Vec3, n: Vec3 },
+    Parallelogram {
+        p: Point3,
+        v: Vec3,
+        w: Vec3,
+        n: Vec3,
+    },
     /// Face `face` of a box: (s, t) ↦ the face point (2s − 1, 2t − 1).
     CubeFace { t: Transform, face: u32, n: Vec3 },
     /// The sphere at longitude 2πs and colatitude πt (the sphere's uv).
     Sphere { sphere: Sphere },
     /// The disk at radius s and angle 2πt.
     Disk { t: Transform, n: Vec3 },
-    /// The plane's square `[x0, x0 + dx] × [y0, y0 + dy]` (object coordinates).
-    Plane { t: Transform, x0: f32, y0: f32, dx: f32, dy: f32, n: Vec3 },
+    /// The plane's square of half side `half` around (cx, cy) (object coordinates), with cells
+    /// growing away from the centre: x = cx + half·sinh(a(2s − 1))/sinh(a).
+    Plane {
+        t: Transform,
+        cx: f32,
+        cy: f32,
+        half: f32,
+        a: f32,
+        n: Vec3,
+    },
     /// A triangle by barycentrics (β, γ): `a + β(b − a) + γ(c − a)`.
-    Triangle { a: Point3, b: Point3, c: Point3, n: Vec3 },
+    Triangle {
+        a: Point3,
+        b: Point3,
+        c: Point3,
+        n: Vec3,
+    },
 }
 
 impl SurfaceMap {
@@ -59,13 +78,26 @@ impl SurfaceMap {
     pub fn point(&self, s: f32, t: f32) -> Point3 {
         match self {
             SurfaceMap::Parallelogram { p, v, w, .. } => *p + *v * s + *w * t,
-            SurfaceMap::CubeFace { t: tr, face, .. } => tr.point(Cube::face_point(*face, 2.0 * s - 1.0, 2.0 * t - 1.0)),
+            SurfaceMap::CubeFace { t: tr, face, .. } => {
+                tr.point(Cube::face_point(*face, 2.0 * s - 1.0, 2.0 * t - 1.0))
+            }
             SurfaceMap::Sphere { sphere } => sphere.geometry_at(sphere_dir(s, t)).p,
             SurfaceMap::Disk { t: tr, .. } => {
                 let phi = 2.0 * PI * t;
                 tr.point(Point3::new(s * phi.cos(), s * phi.sin(), 0.0))
             }
-            SurfaceMap::Plane { t: tr, x0, y0, dx, dy, .. } => tr.point(Point3::new(x0 + s * dx, y0 + t * dy, 0.0)),
+            SurfaceMap::Plane {
+                t: tr,
+                cx,
+                cy,
+                half,
+                a,
+                ..
+            } => tr.point(Point3::new(
+                cx + half * stretch(*a, 2.0 * s - 1.0),
+                cy + half * stretch(*a, 2.0 * t - 1.0),
+                0.0,
+            )),
             SurfaceMap::Triangle { a, b, c, .. } => *a + (*b - *a) * s + (*c - *a) * t,
         }
     }
@@ -81,6 +113,44 @@ impl SurfaceMap {
             SurfaceMap::Sphere { sphere } => sphere.geometry_at(sphere_dir(s, t)).n.to_vec(),
         }
     }
+}
+
+/// sinh(a·u)/sinh(a) for u ∈ [−1, 1] (u itself when a is small).
+#[inline]
+fn stretch(a: f32, u: f32) -> f32 {
+    if a < 1e-3 {
+        u
+    } else {
+        (a * u).sinh() / a.sinh()
+    }
+}
+
+/// The inverse of [`stretch`].
+#[inline]
+fn unstretch(a: f32, x: f32) -> f32 {
+    if a < 1e-3 {
+        x
+    } else {
+        (x * a.sinh()).asinh() / a
+    }
+}
+
+/// The a > 0 with a / sinh(a) = c for c ∈ (0, 1) (0 when c ≥ 1).
+fn stretch_for(c: f32) -> f32 {
+    if !(c < 1.0) {
+        return 0.0;
+    }
+    let c = c.max(1e-6);
+    let (mut lo, mut hi) = (0f32, 20f32);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if mid / mid.sinh() > c {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// The unit-sphere direction of the sphere's uv (s, t).
@@ -180,7 +250,10 @@ impl Element {
         if tri {
             let [p0, p1, p2] = self.tri;
             let c = 1.0 - a - b;
-            (c * p0[0] + a * p1[0] + b * p2[0], c * p0[1] + a * p1[1] + b * p2[1])
+            (
+                c * p0[0] + a * p1[0] + b * p2[0],
+                c * p0[1] + a * p1[1] + b * p2[1],
+            )
         } else {
             let [s0, t0, s1, t1] = self.rect;
             (s0 + (s1 - s0) * a, t0 + (t1 - t0) * b)
@@ -190,7 +263,9 @@ impl Element {
     /// The largest edge of the polygon.
     pub fn max_edge(&self) -> f32 {
         let n = self.nverts as usize;
-        (0..n).map(|k| self.corners[k].distance(self.corners[(k + 1) % n])).fold(0.0, f32::max)
+        (0..n)
+            .map(|k| self.corners[k].distance(self.corners[(k + 1) % n]))
+            .fold(0.0, f32::max)
     }
 }
 
@@ -215,9 +290,10 @@ pub(crate) struct Patch {
 pub(crate) fn lambert_reflectance(m: &Material, uv: Point2) -> Option<Rgb> {
     match &m.model {
         Model::Diffuse { reflectance } => Some(reflectance.eval(uv)),
-        Model::Phong { kd, .. } | Model::CookTorrance { kd, .. } | Model::Plastic { kd, .. } | Model::RoughPlastic { kd, .. } => {
-            Some(kd.eval(uv))
-        }
+        Model::Phong { kd, .. }
+        | Model::CookTorrance { kd, .. }
+        | Model::Plastic { kd, .. }
+        | Model::RoughPlastic { kd, .. } => Some(kd.eval(uv)),
         Model::Specular { .. } | Model::Dielectric { .. } | Model::Conductor { .. } => None,
     }
 }
@@ -226,7 +302,10 @@ pub(crate) fn lambert_reflectance(m: &Material, uv: Point2) -> Option<Rgb> {
 fn is_glossy(m: &Material) -> bool {
     matches!(
         m.model,
-        Model::Phong { .. } | Model::CookTorrance { .. } | Model::Plastic { .. } | Model::RoughPlastic { .. }
+        Model::Phong { .. }
+            | Model::CookTorrance { .. }
+            | Model::Plastic { .. }
+            | Model::RoughPlastic { .. }
     )
 }
 
@@ -256,11 +335,46 @@ pub(crate) fn default_patch_size(scale: f32) -> f32 {
 /// The scene's size: the diagonal of the bounded primitives, or 10.
 pub(crate) fn scene_scale(scene: &Scene) -> (Bounds3, f32) {
     let b = scene.geometry.bounds();
-    let d = if b.is_empty() || !b.is_finite() { 0.0 } else { b.diagonal().norm() };
+    let d = if b.is_empty() || !b.is_finite() {
+        0.0
+    } else {
+        b.diagonal().norm()
+    };
     if d > 0.0 && d.is_finite() {
         (b, d)
     } else {
-        (Bounds3::new(Point3::new(-5.0, -5.0, -5.0), Point3::new(5.0, 5.0, 5.0)), 10.0)
+        (
+            Bounds3::new(Point3::new(-5.0, -5.0, -5.0), Point3::new(5.0, 5.0, 5.0)),
+            10.0,
+        )
+    }
+}
+
+/// The most root elements the patch size may ask for (it is raised beyond).
+const MAX_ROOTS: usize = 250_000;
+
+/// The total area of the scene's bounded surfaces (planes have a fixed number of patches).
+fn total_area(scene: &Scene) -> f32 {
+    let geo = &scene.geometry;
+    let mut a = 0f32;
+    for o in geo.objects() {
+        a += match &o.shape {
+            Shape::Parallelogram(p) => p.area(),
+            Shape::Cube(c) => c.face_areas().iter().sum(),
+            Shape::Plane(_) => 0.0,
+            Shape::Sphere(_) | Shape::Disk(_) | Shape::Polyhedron(_) => {
+                o.shape.bounds().map_or(0.0, |b| b.surface_area())
+            }
+            Shape::Csg(_) => 0.0,
+        };
+    }
+    for m in geo.meshes() {
+        a += (0..m.len() as u32).map(|t| m.area(t)).sum::<f32>();
+    }
+    if a.is_finite() {
+        a
+    } else {
+        0.0
     }
 }
 
@@ -278,13 +392,24 @@ impl Meshing {
     /// Meshes `scene` with largest patch edge `patch_size` (`None`: from the scene's size).
     pub fn build(scene: &Scene, patch_size: Option<f32>, cull: bool) -> Meshing {
         let (bounds, scale) = scene_scale(scene);
-        let h = match patch_size {
+        let mut h = match patch_size {
             Some(h) if h > 0.0 && h.is_finite() => h,
             _ => default_patch_size(scale),
         };
+        // At most about MAX_ROOTS patches per side from the patch size alone.
+        let area = total_area(scene);
+        let h_min = (area / MAX_ROOTS as f32).sqrt();
+        let mut warnings = Vec::new();
+        if h < h_min && h_min.is_finite() {
+            warnings.push(format!(
+                "radiosity: a patch size of {h} would give more than {MAX_ROOTS} patches: using {h_min} instead"
+            ));
+            h = h_min;
+        }
         let mut m = Meshing {
             patch_size: h,
             scale,
+            warnings,
             ..Default::default()
         };
         let geo = &scene.geometry;
@@ -309,7 +434,11 @@ impl Meshing {
                         TexMap::Same
                     } else {
                         let [ia, ib, ic] = me.indices[tri as usize];
-                        TexMap::Bary([me.uvs[ia as usize], me.uvs[ib as usize], me.uvs[ic as usize]])
+                        TexMap::Bary([
+                            me.uvs[ia as usize],
+                            me.uvs[ib as usize],
+                            me.uvs[ic as usize],
+                        ])
                     };
                     m.add_surface(
                         SurfaceMap::Triangle { a, b, c, n },
@@ -352,27 +481,64 @@ impl Meshing {
         m.base_elements = m.elements.len();
         m.set_active_sides(scene, cull);
         m.assign_patches(scene);
+        if m.patches.len() > 20_000 {
+            m.warnings.push(format!(
+                "radiosity: {} patches (mesh triangles are patches at least): form factors grow with the square of the count",
+                m.patches.len()
+            ));
+        }
         m
     }
 
     /// Adds the surfaces of an analytic shape.
-    fn add_shape(&mut self, shape: &Shape, prim: u32, obj: u32, props: SurfaceProps, h: f32, bounds: Bounds3, scale: f32) {
+    fn add_shape(
+        &mut self,
+        shape: &Shape,
+        prim: u32,
+        obj: u32,
+        props: SurfaceProps,
+        h: f32,
+        bounds: Bounds3,
+        scale: f32,
+    ) {
         match shape {
             Shape::Parallelogram(p) => {
                 let n = p.normal().to_vec();
-                let map = SurfaceMap::Parallelogram { p: p.p, v: p.v, w: p.w, n };
+                let map = SurfaceMap::Parallelogram {
+                    p: p.p,
+                    v: p.v,
+                    w: p.w,
+                    n,
+                };
                 let (nu, nv) = (cells(p.v.norm(), h, 1), cells(p.w.norm(), h, 1));
-                self.add_grid(map, SurfaceKind::Parallelogram, TexMap::Same, prim, 0, props, None, nu, nv);
+                self.add_grid(
+                    map,
+                    SurfaceKind::Parallelogram,
+                    TexMap::Same,
+                    prim,
+                    0,
+                    props,
+                    None,
+                    nu,
+                    nv,
+                );
             }
             Shape::Cube(c) => {
                 let t = c.world_from_object;
-                let ex = [t.vector(Vec3::X * 2.0).norm(), t.vector(Vec3::Y * 2.0).norm(), t.vector(Vec3::Z * 2.0).norm()];
+                let ex = [
+                    t.vector(Vec3::X * 2.0).norm(),
+                    t.vector(Vec3::Y * 2.0).norm(),
+                    t.vector(Vec3::Z * 2.0).norm(),
+                ];
                 for face in 0..6u32 {
                     let axis = (face / 2) as usize;
                     let sign = if face % 2 == 1 { 1.0 } else { -1.0 };
                     let mut nl = [0.0f32; 3];
                     nl[axis] = sign;
-                    let n = t.normal(Normal3::new(nl[0], nl[1], nl[2])).normalize().to_vec();
+                    let n = t
+                        .normal(Normal3::new(nl[0], nl[1], nl[2]))
+                        .normalize()
+                        .to_vec();
                     // The face's (a, b) axes (see `Cube::face_point`).
                     let (la, lb) = match axis {
                         0 => (ex[1], ex[2]),
@@ -380,7 +546,17 @@ impl Meshing {
                         _ => (ex[0], ex[1]),
                     };
                     let map = SurfaceMap::CubeFace { t, face, n };
-                    self.add_grid(map, SurfaceKind::CubeFace, TexMap::Same, prim, face, props, Some(obj), cells(la, h, 1), cells(lb, h, 1));
+                    self.add_grid(
+                        map,
+                        SurfaceKind::CubeFace,
+                        TexMap::Same,
+                        prim,
+                        face,
+                        props,
+                        Some(obj),
+                        cells(la, h, 1),
+                        cells(lb, h, 1),
+                    );
                 }
             }
             Shape::Sphere(s) => {
@@ -389,44 +565,91 @@ impl Meshing {
                 let map = SurfaceMap::Sphere { sphere: s.clone() };
                 let nv = cells(PI * r, h, 4);
                 let nu = cells(2.0 * PI * r, h, 8);
-                self.add_grid(map, SurfaceKind::Sphere, TexMap::Same, prim, 0, props, Some(obj), nu, nv);
+                self.add_grid(
+                    map,
+                    SurfaceKind::Sphere,
+                    TexMap::Same,
+                    prim,
+                    0,
+                    props,
+                    Some(obj),
+                    nu,
+                    nv,
+                );
             }
             Shape::Disk(d) => {
                 let t = d.world_from_object;
                 let r = t.vector(Vec3::X).norm().max(t.vector(Vec3::Y).norm());
                 let n = t.normal(Normal3::new(0.0, 0.0, 1.0)).normalize().to_vec();
                 let map = SurfaceMap::Disk { t, n };
-                self.add_grid(map, SurfaceKind::Disk, TexMap::Same, prim, 0, props, None, cells(r, h, 1), cells(2.0 * PI * r, h, 8));
+                self.add_grid(
+                    map,
+                    SurfaceKind::Disk,
+                    TexMap::Same,
+                    prim,
+                    0,
+                    props,
+                    None,
+                    cells(r, h, 1),
+                    cells(2.0 * PI * r, h, 8),
+                );
             }
             Shape::Plane(p) => {
-                // The square of side 2·scale around the scene's centre, with patches twice as large.
+                // A square around the scene's centre, 20 times as large as the scene and as the
+                // plane's distance from it (so that it covers nearly everything the scene sees of
+                // the plane), in 32 × 32 cells growing geometrically from twice the patch size
+                // (or a tenth of the distance) at the centre.
                 let t = p.world_from_object;
-                let q = t.inv_point(bounds.centroid());
+                let c = bounds.centroid();
+                let q = t.inv_point(c);
                 let (sx, sy) = (t.vector(Vec3::X).norm(), t.vector(Vec3::Y).norm());
                 if !(sx > 0.0 && sy > 0.0) {
                     return;
                 }
-                let (hx, hy) = (scale / sx, scale / sy);
                 let n = t.normal(Normal3::new(0.0, 0.0, 1.0)).normalize().to_vec();
+                let dist = (c - t.point(Point3::new(q.x, q.y, 0.0))).norm();
+                let half_world = 20.0 * scale.max(dist);
+                let centre_cell = (2.0 * h).max(0.1 * dist);
+                const CELLS: u32 = 32;
+                let half = half_world / sx.max(sy);
+                // Central cell width 2·a·half / (sinh(a)·CELLS) = centre_cell.
+                let a = stretch_for(centre_cell * CELLS as f32 / (2.0 * half_world));
                 let map = SurfaceMap::Plane {
                     t,
-                    x0: q.x - hx,
-                    y0: q.y - hy,
-                    dx: 2.0 * hx,
-                    dy: 2.0 * hy,
+                    cx: q.x,
+                    cy: q.y,
+                    half,
+                    a,
                     n,
                 };
                 let frame = Frame::from_normal(Normal3::new(0.0, 0.0, 1.0));
-                let tex = TexMap::PlaneFrac { t, s: frame.s, tt: frame.t };
-                let nn = cells(2.0 * scale, 2.0 * h, 1);
-                self.add_grid(map, SurfaceKind::Plane, tex, prim, 0, props, None, nn, nn);
+                let tex = TexMap::PlaneFrac {
+                    t,
+                    s: frame.s,
+                    tt: frame.t,
+                };
+                self.add_grid(
+                    map,
+                    SurfaceKind::Plane,
+                    tex,
+                    prim,
+                    0,
+                    props,
+                    None,
+                    CELLS,
+                    CELLS,
+                );
             }
             Shape::Polyhedron(poly) => {
                 let t = poly.world_from_object;
                 let planes = poly.planes();
                 let big = {
                     let b = poly.bounds();
-                    let d = t.inv_point(b.min).to_vec().norm().max(t.inv_point(b.max).to_vec().norm());
+                    let d = t
+                        .inv_point(b.min)
+                        .to_vec()
+                        .norm()
+                        .max(t.inv_point(b.max).to_vec().norm());
                     4.0 * d.max(1.0)
                 };
                 for (k, &(n, d)) in planes.iter().enumerate() {
@@ -447,7 +670,8 @@ impl Meshing {
                     if poly_pts.len() < 3 {
                         continue;
                     }
-                    let world: Vec<Point3> = poly_pts.iter().map(|p| t.point(p.to_point())).collect();
+                    let world: Vec<Point3> =
+                        poly_pts.iter().map(|p| t.point(p.to_point())).collect();
                     let nw = poly.plane_normal(k as u32).to_vec();
                     let tex = TexMap::PlaneFrac { t, s: f.s, tt: f.t };
                     for i in 1..world.len() - 1 {
@@ -457,7 +681,16 @@ impl Meshing {
                             c: world[i + 1],
                             n: nw,
                         };
-                        self.add_surface(map, SurfaceKind::PolyFan, tex.clone(), prim, k as u32, props, Some(obj), h);
+                        self.add_surface(
+                            map,
+                            SurfaceKind::PolyFan,
+                            tex.clone(),
+                            prim,
+                            k as u32,
+                            props,
+                            Some(obj),
+                            h,
+                        );
                     }
                 }
             }
@@ -497,7 +730,10 @@ impl Meshing {
         // Uniform 4-way splits (at most 10 levels: a million sub-triangles).
         let mut level = vec![root];
         for _ in 0..10 {
-            if level.iter().all(|&i| self.elements[i as usize].max_edge() <= h) {
+            if level
+                .iter()
+                .all(|&i| self.elements[i as usize].max_edge() <= h)
+            {
                 break;
             }
             let mut next = Vec::with_capacity(level.len() * 4);
@@ -554,22 +790,50 @@ impl Meshing {
     fn make_quad(&self, sid: u32, rect: [f32; 4], level: u8) -> Element {
         let map = &self.surfaces[sid as usize].map;
         let [s0, t0, s1, t1] = rect;
-        let corners = [map.point(s0, t0), map.point(s1, t0), map.point(s1, t1), map.point(s0, t1)];
+        let corners = [
+            map.point(s0, t0),
+            map.point(s1, t0),
+            map.point(s1, t1),
+            map.point(s0, t1),
+        ];
         let (sc, tc) = (0.5 * (s0 + s1), 0.5 * (t0 + t1));
         let centre = map.point(sc, tc);
         let normal = map.normal(sc, tc);
         let cross = (corners[2] - corners[0]).cross(corners[3] - corners[1]);
-        finish(sid, rect, [[0.0; 2]; 3], corners, 4, centre, normal, cross, level)
+        finish(
+            sid,
+            rect,
+            [[0.0; 2]; 3],
+            corners,
+            4,
+            centre,
+            normal,
+            cross,
+            level,
+        )
     }
 
     fn make_tri(&self, sid: u32, tri: [[f32; 2]; 3], level: u8) -> Element {
         let map = &self.surfaces[sid as usize].map;
         let [a, b, c] = tri.map(|p| map.point(p[0], p[1]));
-        let (sc, tc) = ((tri[0][0] + tri[1][0] + tri[2][0]) / 3.0, (tri[0][1] + tri[1][1] + tri[2][1]) / 3.0);
+        let (sc, tc) = (
+            (tri[0][0] + tri[1][0] + tri[2][0]) / 3.0,
+            (tri[0][1] + tri[1][1] + tri[2][1]) / 3.0,
+        );
         let centre = map.point(sc, tc);
         let normal = map.normal(sc, tc);
         let cross = (b - a).cross(c - a);
-        finish(sid, [0.0; 4], tri, [a, b, c, c], 3, centre, normal, cross, level)
+        finish(
+            sid,
+            [0.0; 4],
+            tri,
+            [a, b, c, c],
+            3,
+            centre,
+            normal,
+            cross,
+            level,
+        )
     }
 
     /// Splits element `i` into four children (one refinement level deeper when `refine`);
@@ -578,22 +842,36 @@ impl Meshing {
         let e = self.elements[i as usize].clone();
         let first = self.elements.len() as u32;
         let tri = self.surfaces[e.surface as usize].map.is_triangle();
-        let level = if refine { e.level.saturating_add(1) } else { e.level };
+        let level = if refine {
+            e.level.saturating_add(1)
+        } else {
+            e.level
+        };
         let kids: Vec<Element> = if tri {
             let [p0, p1, p2] = e.tri;
             let mid = |a: [f32; 2], b: [f32; 2]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
             let (m01, m12, m02) = (mid(p0, p1), mid(p1, p2), mid(p0, p2));
-            [[p0, m01, m02], [m01, p1, m12], [m02, m12, p2], [m12, m02, m01]]
-                .into_iter()
-                .map(|t| self.make_tri(e.surface, t, level))
-                .collect()
+            [
+                [p0, m01, m02],
+                [m01, p1, m12],
+                [m02, m12, p2],
+                [m12, m02, m01],
+            ]
+            .into_iter()
+            .map(|t| self.make_tri(e.surface, t, level))
+            .collect()
         } else {
             let [s0, t0, s1, t1] = e.rect;
             let (sm, tm) = (0.5 * (s0 + s1), 0.5 * (t0 + t1));
-            [[s0, t0, sm, tm], [sm, t0, s1, tm], [s0, tm, sm, t1], [sm, tm, s1, t1]]
-                .into_iter()
-                .map(|r| self.make_quad(e.surface, r, level))
-                .collect()
+            [
+                [s0, t0, sm, tm],
+                [sm, t0, s1, tm],
+                [s0, tm, sm, t1],
+                [sm, tm, s1, t1],
+            ]
+            .into_iter()
+            .map(|r| self.make_quad(e.surface, r, level))
+            .collect()
         };
         self.elements.extend(kids.into_iter().map(|mut k| {
             k.parent = i;
@@ -611,12 +889,19 @@ impl Meshing {
         let mut emitter_points = Vec::new();
         for s in &self.surfaces {
             if s.props.emission.is_some() {
-                for e in &self.elements[s.first_root as usize..(s.first_root + s.nu * s.nv) as usize] {
+                for e in
+                    &self.elements[s.first_root as usize..(s.first_root + s.nu * s.nv) as usize]
+                {
                     emitter_points.push((s.prim, e.centre));
                 }
             }
         }
-        let escape_test = cull && scene.background.is_black() && scene.lights.iter().all(|l| matches!(l, crate::light::Light::Area(_)));
+        let escape_test = cull
+            && scene.background.is_black()
+            && scene
+                .lights
+                .iter()
+                .all(|l| matches!(l, crate::light::Light::Area(_)));
         let mut stats = RayStats::default();
         for si in 0..self.surfaces.len() {
             let s = &self.surfaces[si];
@@ -625,7 +910,10 @@ impl Meshing {
             let mut active = [false; 2];
             for (side, a) in active.iter_mut().enumerate() {
                 let reflects = rho && (side == 0 || mat.two_sided);
-                let emits = s.props.emission.is_some_and(|e| side == 0 || scene.emissions[e as usize].two_sided);
+                let emits = s
+                    .props
+                    .emission
+                    .is_some_and(|e| side == 0 || scene.emissions[e as usize].two_sided);
                 *a = reflects || emits;
                 if !*a || emits || !cull {
                     continue;
@@ -634,7 +922,9 @@ impl Meshing {
                     if let Some(obj) = s.solid {
                         // The inside of a closed solid: lit only by an emitter inside it.
                         let shape = &scene.geometry.objects()[obj as usize].shape;
-                        *a = emitter_points.iter().any(|&(p, q)| p != s.prim && solid_contains(shape, q));
+                        *a = emitter_points
+                            .iter()
+                            .any(|&(p, q)| p != s.prim && solid_contains(shape, q));
                         continue;
                     }
                 }
@@ -664,8 +954,13 @@ impl Meshing {
             if side == 1 {
                 n = -n;
             }
-            let d = Frame::from_normal(n.to_normal()).to_world(warp::square_to_cosine_hemisphere(cmj(k, N, 0x85eb_ca6b ^ si as u32)));
-            if scene.intersect(&Ray::spawn(p, n.to_normal(), d), stats).is_some() {
+            let d = Frame::from_normal(n.to_normal()).to_world(warp::square_to_cosine_hemisphere(
+                cmj(k, N, 0x85eb_ca6b ^ si as u32),
+            ));
+            if scene
+                .intersect(&Ray::spawn(p, n.to_normal(), d), stats)
+                .is_some()
+            {
                 return false;
             }
         }
@@ -707,9 +1002,19 @@ impl Meshing {
 
     /// The mean reflectance and emitted radiosity of one side of an element (textures averaged
     /// over a 3 × 3 grid).
-    fn side_data(&self, scene: &Scene, s: &Surface, e: &Element, side: usize) -> ([f64; 3], [f64; 3]) {
+    fn side_data(
+        &self,
+        scene: &Scene,
+        s: &Surface,
+        e: &Element,
+        side: usize,
+    ) -> ([f64; 3], [f64; 3]) {
         let mat = &scene.materials[s.props.material as usize];
-        let emission = s.props.emission.map(|k| &scene.emissions[k as usize]).filter(|em| side == 0 || em.two_sided);
+        let emission = s
+            .props
+            .emission
+            .map(|k| &scene.emissions[k as usize])
+            .filter(|em| side == 0 || em.two_sided);
         let reflects = side == 0 || mat.two_sided;
         let tri = s.map.is_triangle();
         let mut rho = [0f64; 3];
@@ -784,11 +1089,15 @@ impl Meshing {
                 (first, (x * x + y * y).sqrt(), phi)
             }
             SurfaceKind::Plane => {
-                let SurfaceMap::Plane { t, x0, y0, dx, dy, .. } = &s0.map else {
+                let SurfaceMap::Plane {
+                    t, cx, cy, half, a, ..
+                } = &s0.map
+                else {
                     return None;
                 };
                 let q = t.inv_point(si.p);
-                (first, (q.x - x0) / dx, (q.y - y0) / dy)
+                let u = |x: f32| 0.5 * (unstretch(*a, (x / half).clamp(-1.0, 1.0)) + 1.0);
+                (first, u(q.x - cx), u(q.y - cy))
             }
             SurfaceKind::PolyFan => {
                 // The fan triangle of face `sub` that contains the point best.
@@ -817,7 +1126,13 @@ impl Meshing {
     /// The leaf element of surface `sid` at parameters (s, t) and the local coordinates in it.
     pub fn descend(&self, sid: u32, s: f32, t: f32) -> (u32, [f32; 2]) {
         let sf = &self.surfaces[sid as usize];
-        let fix = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.5 };
+        let fix = |x: f32| {
+            if x.is_finite() {
+                x.clamp(0.0, 1.0)
+            } else {
+                0.5
+            }
+        };
         let (s, t) = (fix(s), fix(t));
         if sf.map.is_triangle() {
             let mut e = sf.first_root;
@@ -881,8 +1196,16 @@ fn finish(
 ) -> Element {
     let len = cross.norm();
     let area = if len.is_finite() { 0.5 * len } else { 0.0 };
-    let normal = if normal.is_finite() && normal.norm() > 0.0 { normal } else { Vec3::Z };
-    let mut pnormal = if len > 0.0 && len.is_finite() { cross / len } else { normal };
+    let normal = if normal.is_finite() && normal.norm() > 0.0 {
+        normal
+    } else {
+        Vec3::Z
+    };
+    let mut pnormal = if len > 0.0 && len.is_finite() {
+        cross / len
+    } else {
+        normal
+    };
     if pnormal.dot(normal) < 0.0 {
         pnormal = -pnormal;
     }
@@ -933,13 +1256,19 @@ fn barycentric(a: Point3, b: Point3, c: Point3, p: Point3) -> (f32, f32) {
 
 /// Barycentrics (of p1 and p2) of the 2D point `q` in the triangle p0 p1 p2.
 fn bary2(p0: [f32; 2], p1: [f32; 2], p2: [f32; 2], q: [f32; 2]) -> (f32, f32) {
-    let (e1, e2) = ([p1[0] - p0[0], p1[1] - p0[1]], [p2[0] - p0[0], p2[1] - p0[1]]);
+    let (e1, e2) = (
+        [p1[0] - p0[0], p1[1] - p0[1]],
+        [p2[0] - p0[0], p2[1] - p0[1]],
+    );
     let d = [q[0] - p0[0], q[1] - p0[1]];
     let det = e1[0] * e2[1] - e1[1] * e2[0];
     if det == 0.0 {
         return (1.0 / 3.0, 1.0 / 3.0);
     }
-    ((d[0] * e2[1] - d[1] * e2[0]) / det, (e1[0] * d[1] - e1[1] * d[0]) / det)
+    (
+        (d[0] * e2[1] - d[1] * e2[0]) / det,
+        (e1[0] * d[1] - e1[1] * d[0]) / det,
+    )
 }
 
 /// True when the world point `p` is inside the closed solid `shape`.
@@ -955,5 +1284,44 @@ fn solid_contains(shape: &Shape, p: Point3) -> bool {
             poly.planes().iter().all(|&(n, d)| n.dot(q) < d)
         }
         _ => false,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_cells_grow_away_from_the_centre_and_invert() {
+        for c in [0.05f32, 0.3, 0.9] {
+            let a = stretch_for(c);
+            assert!((a / a.sinh() - c).abs() < 1e-4, "{c}: {a}");
+            for u in [-1.0f32, -0.3, 0.0, 0.7, 1.0] {
+                assert!((unstretch(a, stretch(a, u)) - u).abs() < 1e-4);
+            }
+        }
+        assert_eq!(stretch_for(1.5), 0.0);
+        assert_eq!(stretch(0.0, 0.25), 0.25);
+    }
+
+    #[test]
+    fn polygons_clip_to_half_spaces() {
+        let sq = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
+        let half = clip_halfspace(&sq, Vec3::X, 0.0);
+        assert_eq!(half.len(), 4);
+        assert!(half.iter().all(|p| p.x <= 0.0));
+        assert!(clip_halfspace(&sq, Vec3::X, -2.0).is_empty());
+        let (b1, b2) = barycentric(
+            Point3::ORIGIN,
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+            Point3::new(0.25, 0.5, 3.0),
+        );
+        assert!((b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
     }
 }

@@ -33,11 +33,17 @@ pub(crate) struct Solution {
     pub stats: RowStats,
     pub reciprocity: (f64, f64, u64),
     pub fell_back: bool,
+    /// Per patch: [`Row::occluded`] of its row, or −1 when its row was not computed.
+    pub occluded: Vec<f32>,
 }
 
 /// Σ_i A_i |x_i|₁.
 fn weighted_norm(patches: &[Patch], x: &[[f64; 3]]) -> f64 {
-    patches.iter().zip(x).map(|(p, v)| p.area * (v[0].abs() + v[1].abs() + v[2].abs())).sum()
+    patches
+        .iter()
+        .zip(x)
+        .map(|(p, v)| p.area * (v[0].abs() + v[1].abs() + v[2].abs()))
+        .sum()
 }
 
 /// Computes all rows (Gauss–Seidel), or `None` when they would need more than `limit` bytes.
@@ -57,7 +63,46 @@ pub(crate) fn all_rows(engine: &Engine, n: usize, limit: usize) -> Option<Vec<Ro
     Some(rows)
 }
 
+/// The gathering coefficients G_ij = A_j F_ji / A_i from the rows F_j· computed at each patch
+/// (reciprocity): row i of G lists what patch i receives from every patch j, per unit of B_j.
+fn gathering(rows: &[Row], patches: &[Patch]) -> Vec<Row> {
+    let n = rows.len();
+    let mut count = vec![0usize; n];
+    for r in rows {
+        for &i in &r.cols {
+            count[i as usize] += 1;
+        }
+    }
+    let mut out: Vec<Row> = count
+        .iter()
+        .map(|&c| Row {
+            cols: Vec::with_capacity(c),
+            vals: Vec::with_capacity(c),
+            occluded: 0.0,
+        })
+        .collect();
+    for (j, r) in rows.iter().enumerate() {
+        let aj = patches[j].area;
+        for (&i, &f) in r.cols.iter().zip(&r.vals) {
+            let g = out.get_mut(i as usize);
+            if let Some(g) = g {
+                g.cols.push(j as u32);
+                g.vals
+                    .push((f as f64 * aj / patches[i as usize].area) as f32);
+            }
+        }
+    }
+    out
+}
+
 /// Gauss–Seidel on the stored rows, starting from `b0` (or S).
+///
+/// The rows are those computed at each patch: F_ij from patch i's hemicube or rays. By default
+/// patch i gathers with them (they sum to 1 in a closed room, so the furnace is exact). With
+/// `reciprocal`, the gathering coefficient of B_j in row i is A_j F_ji / A_i instead, from the
+/// row computed at j: the coefficients progressive refinement shoots with, so that both solvers
+/// solve exactly the same system (and the power leaving a patch is conserved even when its
+/// centre is hidden, e.g. under a box).
 pub(crate) fn gauss_seidel(
     rows: Vec<Row>,
     patches: &[Patch],
@@ -65,14 +110,31 @@ pub(crate) fn gauss_seidel(
     b0: Option<Vec<[f64; 3]>>,
     threshold: f64,
     max_sweeps: u64,
+    reciprocal: bool,
 ) -> Solution {
     let n = patches.len();
-    let mut b = b0.filter(|b| b.len() == n).unwrap_or_else(|| source.to_vec());
+    let mut b = b0
+        .filter(|b| b.len() == n)
+        .unwrap_or_else(|| source.to_vec());
     let norm = weighted_norm(patches, source);
     let mut stats = RowStats::default();
     for r in &rows {
         stats.add(r.sum());
     }
+    let occluded: Vec<f32> = rows.iter().map(|r| r.occluded).collect();
+    let area: Vec<f64> = patches.iter().map(|p| p.area).collect();
+    let recip = {
+        let refs: Vec<Option<&Row>> = rows.iter().map(Some).collect();
+        reciprocity(&refs, &area)
+    };
+    let mut row_bytes = rows.iter().map(Row::bytes).sum::<usize>();
+    let rows = if reciprocal {
+        let g = gathering(&rows, patches);
+        row_bytes += g.iter().map(Row::bytes).sum::<usize>();
+        g
+    } else {
+        rows
+    };
     let gather = |b: &[[f64; 3]], r: &Row| {
         let mut g = [0f64; 3];
         for (&j, &f) in r.cols.iter().zip(&r.vals) {
@@ -110,23 +172,23 @@ pub(crate) fn gauss_seidel(
     for i in 0..n {
         let g = gather(&b, &rows[i]);
         let p = &patches[i];
-        let r: f64 = (0..3).map(|c| (source[i][c] + p.rho[c] * g[c] - b[i][c]).abs()).sum();
+        let r: f64 = (0..3)
+            .map(|c| (source[i][c] + p.rho[c] * g[c] - b[i][c]).abs())
+            .sum();
         res += p.area * r;
     }
     let residual = if norm > 0.0 { res / norm } else { 0.0 };
-    let area: Vec<f64> = patches.iter().map(|p| p.area).collect();
-    let refs: Vec<Option<&Row>> = rows.iter().map(Some).collect();
-    let recip = reciprocity(&refs, &area);
     Solution {
         b,
         iterations: sweeps,
         residual,
         converged: residual <= threshold.max(1e-12) || converged,
         rows_computed: rows.len() as u64,
-        row_bytes: rows.iter().map(Row::bytes).sum(),
+        row_bytes,
         stats,
         reciprocity: recip,
         fell_back: false,
+        occluded,
     }
 }
 
@@ -146,7 +208,9 @@ impl RowCache {
             return;
         }
         while self.bytes + b > self.limit {
-            let Some(old) = self.order.pop_front() else { break };
+            let Some(old) = self.order.pop_front() else {
+                break;
+            };
             if let Some(o) = self.rows.remove(&old) {
                 self.bytes -= o.bytes();
             }
@@ -162,7 +226,14 @@ impl RowCache {
 const BATCH: usize = 8;
 
 /// Southwell's progressive refinement with rows computed on demand.
-pub(crate) fn progressive(engine: &Engine, patches: &[Patch], source: &[[f64; 3]], threshold: f64, max_shots: u64, cache_limit: usize) -> Solution {
+pub(crate) fn progressive(
+    engine: &Engine,
+    patches: &[Patch],
+    source: &[[f64; 3]],
+    threshold: f64,
+    max_shots: u64,
+    cache_limit: usize,
+) -> Solution {
     let n = patches.len();
     let mut b = source.to_vec();
     let mut unshot = source.to_vec();
@@ -179,6 +250,7 @@ pub(crate) fn progressive(engine: &Engine, patches: &[Patch], source: &[[f64; 3]
     let mut rows_computed = 0u64;
     let mut fraction = if norm > 0.0 { 1.0 } else { 0.0 };
     let mut power: Vec<(f64, u32)> = Vec::with_capacity(n);
+    let mut occluded = vec![-1f32; n];
     while fraction > threshold && shots < max_shots {
         power.clear();
         let mut total = 0f64;
@@ -199,12 +271,17 @@ pub(crate) fn progressive(engine: &Engine, patches: &[Patch], source: &[[f64; 3]
         }
         let mut batch: Vec<(f64, u32)> = power[..k].to_vec();
         batch.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let missing: Vec<u32> = batch.iter().map(|x| x.1).filter(|i| !cache.rows.contains_key(i)).collect();
+        let missing: Vec<u32> = batch
+            .iter()
+            .map(|x| x.1)
+            .filter(|i| !cache.rows.contains_key(i))
+            .collect();
         let fresh = engine.rows(&missing);
         rows_computed += fresh.len() as u64;
         let mut local: HashMap<u32, Row> = HashMap::new();
         for (i, r) in missing.into_iter().zip(fresh) {
             stats.add(r.sum());
+            occluded[i as usize] = r.occluded;
             local.insert(i, r);
         }
         for &(_, i) in &batch {
@@ -243,5 +320,6 @@ pub(crate) fn progressive(engine: &Engine, patches: &[Patch], source: &[[f64; 3]
         stats,
         reciprocity: recip,
         fell_back: false,
+        occluded,
     }
 }

@@ -1,0 +1,177 @@
+//! `candela render --integrator radiosity` end to end: both Cornell boxes (candela language and
+//! Mitsuba XML), the options `--patch-size`, `--form-factors`, `--solver`, `--radiosity-cache`
+//! (saved, reused, detected as stale, recovered when corrupt), and errors naming the option.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn candela(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_candela"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("candela-radiosity-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "--integrator",
+        "radiosity",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "-q",
+        "--stats",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    candela(&args)
+}
+
+#[test]
+fn both_cornell_boxes_render_with_every_method_and_solver() {
+    let dir = scratch("cornell");
+    let scenes = [
+        repo().join("examples/cornell-box.scene"),
+        repo().join("examples/cornell-box.xml"),
+    ];
+    for scene in &scenes {
+        for (ff, solver) in [("hemicube", "gauss-seidel"), ("raycast", "progressive")] {
+            let out = dir.join("c.pfm");
+            let o = render(
+                scene,
+                &out,
+                &[
+                    "--patch-size",
+                    "0.3",
+                    "--form-factors",
+                    ff,
+                    "--solver",
+                    solver,
+                ],
+            );
+            assert!(
+                o.status.success(),
+                "{} {ff} {solver}: {}",
+                scene.display(),
+                stderr(&o)
+            );
+            let err = stderr(&o);
+            assert!(
+                err.contains(&format!("{ff} form factors"))
+                    && err.contains(&format!("{solver} solver")),
+                "{err}"
+            );
+            assert!(err.contains("converged"), "{err}");
+            assert!(std::fs::metadata(&out).unwrap().len() > 32 * 32 * 12);
+        }
+    }
+}
+
+#[test]
+fn the_cache_is_saved_reused_and_replaced_when_stale() {
+    let dir = scratch("cache");
+    let scene = repo().join("examples/cornell-box.scene");
+    let cache = dir.join("cornell.rad");
+    let cache_arg = cache.to_str().unwrap().to_string();
+    let first = dir.join("first.pfm");
+    let o = render(
+        &scene,
+        &first,
+        &["--patch-size", "0.4", "--radiosity-cache", &cache_arg],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let saved = std::fs::read(&cache).expect("the cache was written");
+    // No temporary file is left behind.
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 2);
+
+    // Same scene and options: loaded, the same image, the file unchanged.
+    let second = dir.join("second.pfm");
+    let o = render(
+        &scene,
+        &second,
+        &["--patch-size", "0.4", "--radiosity-cache", &cache_arg],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("loaded from the cache"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        std::fs::read(&first).unwrap(),
+        std::fs::read(&second).unwrap()
+    );
+    assert_eq!(std::fs::read(&cache).unwrap(), saved);
+
+    // Other options: stale, solved again and replaced.
+    let o = render(
+        &scene,
+        &second,
+        &["--patch-size", "0.5", "--radiosity-cache", &cache_arg],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("does not match"), "{}", stderr(&o));
+    assert_ne!(std::fs::read(&cache).unwrap(), saved);
+
+    // A corrupt file: solved again and replaced.
+    std::fs::write(&cache, b"garbage").unwrap();
+    let o = render(
+        &scene,
+        &second,
+        &["--patch-size", "0.4", "--radiosity-cache", &cache_arg],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("invalid"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&cache).unwrap(), saved);
+}
+
+#[test]
+fn bad_radiosity_options_are_errors_naming_the_option() {
+    let dir = scratch("errors");
+    let scene = repo().join("examples/cornell-box.scene");
+    let out = dir.join("x.png");
+    for (args, option) in [
+        (
+            vec!["--form-factors", "radiance"],
+            "--form-factors 'radiance'",
+        ),
+        (vec!["--solver", "jacobi"], "--solver 'jacobi'"),
+        (vec!["--patch-size", "-1"], "--patch-size"),
+        (vec!["--patch-size", "0"], "--patch-size"),
+    ] {
+        let o = render(&scene, &out, &args);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(stderr(&o).contains(option), "{args:?}: {}", stderr(&o));
+        assert!(!out.exists(), "{args:?} wrote an image");
+    }
+    // The names are checked whatever the integrator.
+    let o = candela(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--solver",
+        "jacobi",
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success() && stderr(&o).contains("--solver 'jacobi'"));
+}
