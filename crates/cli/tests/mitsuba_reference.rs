@@ -87,7 +87,7 @@ fn cornell_box_matches_mitsuba_statistically() {
     }
     let rate = failed as f64 / tested as f64;
     assert!(
-        rate < 0.03,
+        rate < 0.02,
         "{failed} of {tested} pixel channels fail the z-test ({:.2} %)",
         rate * 100.0
     );
