@@ -1,30 +1,9 @@
 //! The `candela` command line, end to end: every example renders, errors are reported with
 //! positions or option names and leave no output, and images do not depend on thread counts.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn candela(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_candela"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("candela-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{candela, repo, scratch, stderr};
 
 /// Every scene of examples/ renders at a small size with its default integrator and with the
 /// preview ones.

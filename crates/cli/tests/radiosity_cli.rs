@@ -2,30 +2,11 @@
 //! Mitsuba XML), the options `--patch-size`, `--form-factors`, `--solver`, `--radiosity-cache`
 //! (saved, reused, detected as stale, recovered when corrupt), and errors naming the option.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn candela(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_candela"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("candela-radiosity-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{candela, repo, scratch, stderr};
+use std::path::Path;
+use std::process::Output;
 
 fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     let mut args = vec![

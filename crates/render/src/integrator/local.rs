@@ -21,13 +21,12 @@ use crate::stats::RayStats;
 /// Directions per shading point for hemisphere lights.
 const HEMISPHERE_SAMPLES: u32 = 16;
 
-/// Ray casting with the local model, no shadows.
+/// Ray casting with the local model: `local` without shadows, `direct` with shadow rays.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Local;
-
-/// Ray casting with the local model and shadow rays.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Direct;
+pub struct Local {
+    /// Trace shadow rays (the `direct` integrator).
+    pub shadows: bool,
+}
 
 impl Integrator for Local {
     fn radiance(
@@ -38,22 +37,7 @@ impl Integrator for Local {
         stats: &mut RayStats,
     ) -> Rgb {
         match scene.interact(ray, stats) {
-            Some(si) => shade(scene, &si, false, sampler, stats),
-            None => scene.escaped(ray.d.normalize()),
-        }
-    }
-}
-
-impl Integrator for Direct {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Rgb {
-        match scene.interact(ray, stats) {
-            Some(si) => shade(scene, &si, true, sampler, stats),
+            Some(si) => shade(scene, &si, self.shadows, sampler, stats),
             None => scene.escaped(ray.d.normalize()),
         }
     }
@@ -168,7 +152,7 @@ mod tests {
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
         let mut sm = Sampler::new(0, 0);
-        let l = Direct.radiance(&scene, &ray, &mut sm, &mut st);
+        let l = Local { shadows: true }.radiance(&scene, &ray, &mut sm, &mut st);
         let expected = Rgb::new(
             std::f32::consts::FRAC_1_PI * std::f32::consts::FRAC_1_SQRT_2,
             0.0,
@@ -207,8 +191,11 @@ mod tests {
         );
         let mut st = RayStats::default();
         let mut sm = Sampler::new(0, 0);
-        let lit = Local.radiance(&scene, &ray, &mut sm, &mut st);
+        let lit = Local { shadows: false }.radiance(&scene, &ray, &mut sm, &mut st);
         assert!((lit.r - std::f32::consts::FRAC_1_PI).abs() < 1e-5);
-        assert_eq!(Direct.radiance(&scene, &ray, &mut sm, &mut st), Rgb::BLACK);
+        assert_eq!(
+            Local { shadows: true }.radiance(&scene, &ray, &mut sm, &mut st),
+            Rgb::BLACK
+        );
     }
 }

@@ -9,7 +9,7 @@ mod path;
 mod whitted;
 
 pub use debug::{Depth, Flat, Normals, OnOff};
-pub use local::{shade, Direct, Local};
+pub use local::{shade, Local};
 pub use path::{CoursePath, Path};
 pub use whitted::Whitted;
 
@@ -83,8 +83,8 @@ impl IntegratorKind {
             IntegratorKind::Flat => Ok(Box::new(Flat)),
             IntegratorKind::Normals => Ok(Box::new(Normals)),
             IntegratorKind::Depth => Ok(Box::new(Depth)),
-            IntegratorKind::Local => Ok(Box::new(Local)),
-            IntegratorKind::Direct => Ok(Box::new(Direct)),
+            IntegratorKind::Local => Ok(Box::new(Local { shadows: false })),
+            IntegratorKind::Direct => Ok(Box::new(Local { shadows: true })),
             IntegratorKind::Whitted => Ok(Box::new(Whitted {
                 max_depth: match settings.max_depth {
                     None => 10,

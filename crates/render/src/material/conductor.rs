@@ -5,7 +5,7 @@
 
 use super::fresnel::{fresnel_conductor, reflect};
 use super::microfacet::Microfacet;
-use super::LocalSample;
+use super::{reflection_sample, LocalSample};
 use crate::color::Rgb;
 use crate::math::Vec3;
 
@@ -65,16 +65,5 @@ pub fn sample(
     }
     let m = mf.sample(wo, u);
     let wi = reflect(wo, m);
-    let pdf = microfacet_pdf(mf, wo, wi);
-    if !(pdf > 0.0) || wi.z <= 0.0 {
-        return None;
-    }
-    let value = eval(mf, c, r, wo, wi);
-    Some(LocalSample {
-        wi,
-        weight: value / pdf,
-        pdf,
-        delta: false,
-        eta: 1.0,
-    })
+    reflection_sample(wi, microfacet_pdf(mf, wo, wi), eval(mf, c, r, wo, wi))
 }

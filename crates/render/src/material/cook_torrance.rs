@@ -12,7 +12,7 @@
 use super::conductor::{microfacet_lobe, microfacet_pdf};
 use super::fresnel::{fresnel_dielectric, reflect};
 use super::microfacet::Microfacet;
-use super::LocalSample;
+use super::{reflection_sample, specular_probability, LocalSample};
 use crate::color::Rgb;
 use crate::math::{Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
@@ -32,12 +32,7 @@ pub struct CookTorrance {
 
 impl CookTorrance {
     fn specular_probability(&self) -> f32 {
-        let (d, s) = (self.kd.average(), self.ks.average());
-        if d + s > 0.0 {
-            s / (d + s)
-        } else {
-            0.0
-        }
+        specular_probability(self.kd, self.ks, 0.5)
     }
 
     /// D·G·F/(4 cos θo), the specular lobe times cos θi.
@@ -75,17 +70,7 @@ impl CookTorrance {
         } else {
             square_to_cosine_hemisphere(u2)
         };
-        let pdf = self.pdf(wo, wi);
-        if wi.z <= 0.0 || !(pdf > 0.0) {
-            return None;
-        }
-        Some(LocalSample {
-            wi,
-            weight: self.eval(wo, wi) / pdf,
-            pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        reflection_sample(wi, self.pdf(wo, wi), self.eval(wo, wi))
     }
 
     /// The local model for one light: I_d·k_d·(n·l) + I_s·k_s·D·G·F/(4 cos θo cos θi)·(n·l).

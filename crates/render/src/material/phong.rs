@@ -12,7 +12,7 @@
 //! k_s.
 
 use super::fresnel::{reflect, reflect_z};
-use super::LocalSample;
+use super::{reflection_sample, specular_probability, LocalSample};
 use crate::color::Rgb;
 use crate::math::{Frame, Vec3, INV_PI, PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
@@ -65,12 +65,7 @@ fn lobe_pdf(n: f32, cos: f32) -> f32 {
 
 impl PhongBrdf {
     fn specular_probability(&self) -> f32 {
-        let (d, s) = (self.kd.average(), self.ks.average());
-        if d + s > 0.0 {
-            s / (d + s)
-        } else {
-            0.0
-        }
+        specular_probability(self.kd, self.ks, 0.5)
     }
 
     /// The specular lobe's value (without k_s) and its sampling density for the pair.
@@ -131,17 +126,7 @@ impl PhongBrdf {
         } else {
             square_to_cosine_hemisphere(u2)
         };
-        let pdf = self.pdf(wo, wi);
-        if wi.z <= 0.0 || !(pdf > 0.0) {
-            return None;
-        }
-        Some(LocalSample {
-            wi,
-            weight: self.eval(wo, wi) / pdf,
-            pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        reflection_sample(wi, self.pdf(wo, wi), self.eval(wo, wi))
     }
 
     /// The lecture's local model for one light: I_d·k_d·(n·l) + I_s·k_s·(r·v)^n (or (n·h)^n).

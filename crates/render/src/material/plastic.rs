@@ -13,7 +13,7 @@
 use super::conductor::{microfacet_lobe, microfacet_pdf};
 use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance, reflect, reflect_z};
 use super::microfacet::Microfacet;
-use super::LocalSample;
+use super::{reflection_sample, specular_probability, LocalSample};
 use crate::color::Rgb;
 use crate::math::{Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
@@ -43,15 +43,7 @@ pub struct Plastic {
 
 impl Plastic {
     fn specular_probability(&self, f_i: f32) -> f32 {
-        let (d, s) = (self.kd.average(), self.ks.average());
-        let w = if d + s > 0.0 { s / (d + s) } else { 0.5 };
-        let ps = f_i * w;
-        let pd = (1.0 - f_i) * (1.0 - w);
-        if ps + pd > 0.0 {
-            ps / (ps + pd)
-        } else {
-            0.0
-        }
+        specular_probability(self.kd, self.ks, f_i)
     }
 
     /// f·cos θi of the diffuse part (the specular part is a delta).
@@ -92,17 +84,11 @@ impl Plastic {
             });
         }
         let wi = square_to_cosine_hemisphere(u2);
-        let pdf = (1.0 - ps) * cosine_hemisphere_pdf(wi.z);
-        if !(pdf > 0.0) {
-            return None;
-        }
-        Some(LocalSample {
+        reflection_sample(
             wi,
-            weight: self.eval(wo, wi) / pdf,
-            pdf,
-            delta: false,
-            eta: 1.0,
-        })
+            (1.0 - ps) * cosine_hemisphere_pdf(wi.z),
+            self.eval(wo, wi),
+        )
     }
 }
 
@@ -190,15 +176,7 @@ pub struct RoughPlastic<'a> {
 
 impl RoughPlastic<'_> {
     fn specular_probability(&self, t_i: f32) -> f32 {
-        let (d, s) = (self.kd.average(), self.ks.average());
-        let w = if d + s > 0.0 { s / (d + s) } else { 0.5 };
-        let ps = (1.0 - t_i) * w;
-        let pd = t_i * (1.0 - w);
-        if ps + pd > 0.0 {
-            ps / (ps + pd)
-        } else {
-            0.0
-        }
+        specular_probability(self.kd, self.ks, 1.0 - t_i)
     }
 
     /// f·cos θi.
@@ -237,16 +215,6 @@ impl RoughPlastic<'_> {
         } else {
             square_to_cosine_hemisphere(u2)
         };
-        let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) || wi.z <= 0.0 {
-            return None;
-        }
-        Some(LocalSample {
-            wi,
-            weight: self.eval(wo, wi) / pdf,
-            pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        reflection_sample(wi, self.pdf(wo, wi), self.eval(wo, wi))
     }
 }
