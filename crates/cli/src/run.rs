@@ -36,10 +36,17 @@ pub fn render(a: SceneArgs) -> Result<()> {
 
 /// The output files, checked before any work so that a bad extension costs nothing.
 fn outputs(args: &RenderArgs, default: &Path) -> Result<Vec<PathBuf>> {
-    let outs = if args.outputs.is_empty() { vec![default.to_path_buf()] } else { args.outputs.clone() };
+    let outs = if args.outputs.is_empty() {
+        vec![default.to_path_buf()]
+    } else {
+        args.outputs.clone()
+    };
     for o in &outs {
         if !candela_imageio::supported_extension(o) {
-            bail!("--output '{}': unknown image format (use .png, .pfm or .exr)", o.display());
+            bail!(
+                "--output '{}': unknown image format (use .png, .pfm or .exr)",
+                o.display()
+            );
         }
     }
     Ok(outs)
@@ -50,7 +57,10 @@ fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
     let accel = match &args.accel {
         None => AccelKind::default(),
         Some(name) => AccelKind::from_name(name).with_context(|| {
-            format!("--accel '{name}': unknown acceleration structure (expected one of: {})", AccelKind::NAMES.join(", "))
+            format!(
+                "--accel '{name}': unknown acceleration structure (expected one of: {})",
+                AccelKind::NAMES.join(", ")
+            )
         })?,
     };
     let mut defines = Vec::new();
@@ -72,7 +82,11 @@ pub fn tone_map(t: &ToneArgs, default_gamma: f32) -> ToneMap {
     ToneMap {
         factor: t.factor,
         luminosity: t.luminosity,
-        encoding: if t.srgb { Encoding::Srgb } else { Encoding::Gamma(t.gamma.unwrap_or(default_gamma)) },
+        encoding: if t.srgb {
+            Encoding::Srgb
+        } else {
+            Encoding::Gamma(t.gamma.unwrap_or(default_gamma))
+        },
     }
 }
 
@@ -181,14 +195,26 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// The display gamma of rendered LDR images unless `--gamma` says otherwise.
 const RENDER_GAMMA: f32 = 2.2;
 
-fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf], load_seconds: f64) -> Result<()> {
+fn render_and_write(
+    loaded: LoadedScene,
+    args: &RenderArgs,
+    outputs: &[PathBuf],
+    load_seconds: f64,
+) -> Result<()> {
     for w in &loaded.warnings {
         eprintln!("candela: warning: {w}");
     }
     let hints = &loaded.hints;
-    let name = args.integrator.as_deref().or(hints.integrator.as_deref()).unwrap_or("path");
+    let name = args
+        .integrator
+        .as_deref()
+        .or(hints.integrator.as_deref())
+        .unwrap_or("path");
     let kind = IntegratorKind::from_name(name).with_context(|| {
-        format!("--integrator '{name}': unknown integrator (expected one of: {})", IntegratorKind::NAMES.join(", "))
+        format!(
+            "--integrator '{name}': unknown integrator (expected one of: {})",
+            IntegratorKind::NAMES.join(", ")
+        )
     })?;
     let integrator_settings = IntegratorSettings {
         max_depth: args.max_depth.or(hints.max_depth),
@@ -223,19 +249,26 @@ fn render_and_write(loaded: LoadedScene, args: &RenderArgs, outputs: &[PathBuf],
     } else {
         let b = ProgressBar::new((settings.width * settings.height) as u64);
         b.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent}% ETA {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {percent}% ETA {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         b
     };
     let start = Instant::now();
-    let out = pool.install(|| render_image(&loaded.scene, integrator.as_ref(), &settings, &|n| bar.inc(n)));
+    let out = pool.install(|| {
+        render_image(&loaded.scene, integrator.as_ref(), &settings, &|n| {
+            bar.inc(n)
+        })
+    });
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
 
     let tone = tone_map(&args.tone, RENDER_GAMMA);
     for path in outputs {
-        candela_imageio::write_image(path, &out.image, &tone).with_context(|| format!("writing '{}'", path.display()))?;
+        candela_imageio::write_image(path, &out.image, &tone)
+            .with_context(|| format!("writing '{}'", path.display()))?;
     }
     if args.stats {
         eprintln!("scene loaded and built in {load_seconds:.3} s");

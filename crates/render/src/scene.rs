@@ -81,7 +81,10 @@ impl Geometry {
             (0..objects.len() as u32).partition(|&i| objects[i as usize].shape.bounds().is_some());
         let mut prims: Vec<PrimRef> = bounded.into_iter().map(PrimRef::Object).collect();
         for (m, mesh) in meshes.iter().enumerate() {
-            prims.extend((0..mesh.len() as u32).map(|tri| PrimRef::Triangle { mesh: m as u32, tri }));
+            prims.extend((0..mesh.len() as u32).map(|tri| PrimRef::Triangle {
+                mesh: m as u32,
+                tri,
+            }));
         }
         let n = prims.len() as u32;
         prims.extend(unbounded.into_iter().map(PrimRef::Object));
@@ -140,7 +143,10 @@ impl Geometry {
     /// Bounds of a bounded primitive.
     pub fn prim_bounds(&self, prim: u32) -> Bounds3 {
         match self.prims[prim as usize] {
-            PrimRef::Object(o) => self.objects[o as usize].shape.bounds().unwrap_or(Bounds3::EMPTY),
+            PrimRef::Object(o) => self.objects[o as usize]
+                .shape
+                .bounds()
+                .unwrap_or(Bounds3::EMPTY),
             PrimRef::Triangle { mesh, tri } => self.meshes[mesh as usize].triangle_bounds(tri),
         }
     }
@@ -161,7 +167,10 @@ impl Geometry {
         let (g, props) = match self.prims[hit.prim as usize] {
             PrimRef::Object(o) => {
                 let obj = &self.objects[o as usize];
-                (obj.shape.geometry(ray, &sh), obj.shape.hit_props(&sh).unwrap_or(obj.props))
+                (
+                    obj.shape.geometry(ray, &sh),
+                    obj.shape.hit_props(&sh).unwrap_or(obj.props),
+                )
             }
             PrimRef::Triangle { mesh, tri } => {
                 let m = &self.meshes[mesh as usize];
@@ -210,7 +219,9 @@ impl Scene {
     pub fn escaped(&self, d: Vec3) -> Rgb {
         self.infinite_lights
             .iter()
-            .fold(self.background, |acc, &i| acc + self.lights[i as usize].escaped(d))
+            .fold(self.background, |acc, &i| {
+                acc + self.lights[i as usize].escaped(d)
+            })
     }
 
     /// The closest hit along `ray`.
@@ -218,7 +229,11 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         stats.rays += 1;
         let mut best = self.accel.intersect(&self.geometry, ray, stats);
-        let sr = ShearedRay::new(ray);
+        if self.geometry.bounded == self.geometry.prim_count() {
+            return best;
+        }
+        // The unbounded primitives (planes, which ignore the sheared ray).
+        let sr = ShearedRay::unused();
         let mut r = *ray;
         if let Some(b) = &best {
             r.tmax = b.t.next_up();
@@ -238,7 +253,7 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray, stats: &mut RayStats) -> bool {
         stats.shadow_rays += 1;
-        let sr = ShearedRay::new(ray);
+        let sr = ShearedRay::unused();
         (self.geometry.bounded..self.geometry.prim_count()).any(|p| {
             stats.prim_tests += 1;
             self.geometry.intersect_prim(p, ray, &sr).is_some()
@@ -259,7 +274,8 @@ impl Scene {
     /// The closest hit's full interaction.
     #[inline]
     pub fn interact(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfaceInteraction> {
-        self.intersect(ray, stats).map(|h| self.geometry.interaction(ray, &h))
+        self.intersect(ray, stats)
+            .map(|h| self.geometry.interaction(ray, &h))
     }
 
     /// The material of an interaction.
@@ -355,7 +371,12 @@ impl SceneBuilder {
 
     /// Adds a shape with its material and optional emission. Emissive spheres,
     /// parallelograms, disks and boxes become area lights.
-    pub fn add_shape(&mut self, shape: Shape, material: MaterialId, emission: Option<u32>) -> &mut Self {
+    pub fn add_shape(
+        &mut self,
+        shape: Shape,
+        material: MaterialId,
+        emission: Option<u32>,
+    ) -> &mut Self {
         let light = emission.and_then(|e| {
             let l = match &shape {
                 Shape::Sphere(s) => AreaLight::sphere(s.clone(), e),
@@ -385,7 +406,11 @@ impl SceneBuilder {
             return self;
         }
         if let Some(e) = mesh.props.emission {
-            self.lights.push(Light::Area(AreaLight::mesh(&mesh, self.meshes.len() as u32, e)));
+            self.lights.push(Light::Area(AreaLight::mesh(
+                &mesh,
+                self.meshes.len() as u32,
+                e,
+            )));
             mesh.props.light = Some((self.lights.len() - 1) as u32);
         }
         self.meshes.push(mesh);
@@ -406,7 +431,9 @@ impl SceneBuilder {
             materials: self.materials,
             emissions: self.emissions,
             background: self.background,
-            infinite_lights: (0..self.lights.len() as u32).filter(|&i| self.lights[i as usize].is_infinite()).collect(),
+            infinite_lights: (0..self.lights.len() as u32)
+                .filter(|&i| self.lights[i as usize].is_infinite())
+                .collect(),
             lights: self.lights,
             ambient: self.ambient,
         }
@@ -421,9 +448,27 @@ mod tests {
     fn two_spheres_and_a_plane() -> Scene {
         let mut b = SceneBuilder::new();
         let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
-        b.add_shape(Shape::Plane(Plane::new(Transform::translation(Vec3::new(0.0, 0.0, -1.0)))), m, None);
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(5.0, 0.0, 0.0)))), m, None);
-        b.add_shape(Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(10.0, 0.0, 0.0)))), m, None);
+        b.add_shape(
+            Shape::Plane(Plane::new(Transform::translation(Vec3::new(
+                0.0, 0.0, -1.0,
+            )))),
+            m,
+            None,
+        );
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                5.0, 0.0, 0.0,
+            )))),
+            m,
+            None,
+        );
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                10.0, 0.0, 0.0,
+            )))),
+            m,
+            None,
+        );
         b.build(AccelKind::None)
     }
 
@@ -431,13 +476,24 @@ mod tests {
     fn world_returns_the_closest_hit() {
         let s = two_spheres_and_a_plane();
         let mut st = RayStats::default();
-        let h = s.interact(&Ray::new(Point3::ORIGIN, Vec3::X), &mut st).unwrap();
+        let h = s
+            .interact(&Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
+            .unwrap();
         assert_eq!(h.p, Point3::new(4.0, 0.0, 0.0));
-        let h = s.interact(&Ray::new(Point3::new(20.0, 0.0, 0.0), -Vec3::X), &mut st).unwrap();
+        let h = s
+            .interact(&Ray::new(Point3::new(20.0, 0.0, 0.0), -Vec3::X), &mut st)
+            .unwrap();
         assert_eq!(h.p, Point3::new(11.0, 0.0, 0.0));
-        let h = s.interact(&Ray::new(Point3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0)), &mut st).unwrap();
+        let h = s
+            .interact(
+                &Ray::new(Point3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0)),
+                &mut st,
+            )
+            .unwrap();
         assert_eq!(h.p, Point3::new(0.0, 0.0, -1.0));
-        assert!(s.interact(&Ray::new(Point3::ORIGIN, Vec3::Z), &mut st).is_none());
+        assert!(s
+            .interact(&Ray::new(Point3::ORIGIN, Vec3::Z), &mut st)
+            .is_none());
         assert_eq!(st.rays, 4);
     }
 

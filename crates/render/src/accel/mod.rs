@@ -15,14 +15,23 @@
 //! duplicated), and traversal continues while the next cell's entry `t` is at most `t_limit` of
 //! the best hit, so hits at equal `t` in later cells are still tested and the tie goes to the
 //! smaller primitive id. A recently tested primitive is not tested again (a small mailbox).
+//!
+//! The [`Bvh`] (the default) is the fast one: 8-wide nodes and blocks of four triangles tested
+//! with SIMD ([`simd`], AVX2 chosen at run time). With the cargo feature `embree`, Intel
+//! Embree 3 is available too ([`AccelKind::Embree`]) for comparisons; it is not bit-identical.
 
 mod bvh;
+#[cfg(feature = "embree")]
+mod embree;
 mod grid;
 mod kdtree;
 mod list;
 mod octree;
+mod simd;
 
 pub use bvh::{Bvh, BvhNode};
+#[cfg(feature = "embree")]
+pub use embree::Embree;
 pub use grid::Grid;
 pub use kdtree::{KdNode, KdTree};
 pub use list::List;
@@ -48,11 +57,20 @@ pub enum AccelKind {
     Grid,
     /// The octree.
     Octree,
+    /// Intel Embree 3 for mesh triangles (feature `embree`; hits agree with the others up to
+    /// round-off only).
+    #[cfg(feature = "embree")]
+    Embree,
 }
 
 impl AccelKind {
     /// The command-line names, in order.
+    #[cfg(not(feature = "embree"))]
     pub const NAMES: &'static [&'static str] = &["bvh", "kdtree", "grid", "octree", "none"];
+    /// The command-line names, in order.
+    #[cfg(feature = "embree")]
+    pub const NAMES: &'static [&'static str] =
+        &["bvh", "kdtree", "grid", "octree", "none", "embree"];
 
     /// Parses a command-line name.
     pub fn from_name(name: &str) -> Option<Self> {
@@ -62,8 +80,25 @@ impl AccelKind {
             "kdtree" => Some(AccelKind::KdTree),
             "grid" => Some(AccelKind::Grid),
             "octree" => Some(AccelKind::Octree),
+            #[cfg(feature = "embree")]
+            "embree" => Some(AccelKind::Embree),
             _ => None,
         }
+    }
+
+    /// Parses a command-line name, with a message for an unknown one (and for `embree` in a
+    /// build without the `embree` feature).
+    pub fn parse(name: &str) -> Result<Self, String> {
+        if let Some(k) = Self::from_name(name) {
+            return Ok(k);
+        }
+        if name == "embree" {
+            return Err("built without embree (rebuild with the cargo feature `embree`)".into());
+        }
+        Err(format!(
+            "unknown acceleration structure '{name}' (expected one of: {})",
+            Self::NAMES.join(", ")
+        ))
     }
 }
 
@@ -80,16 +115,21 @@ pub struct BuildPrim {
 
 /// The build records of all bounded primitives of `geometry` (empty boxes left out).
 pub fn build_prims(geometry: &Geometry) -> Vec<BuildPrim> {
-    (0..geometry.bounded_count())
-        .filter_map(|id| {
-            let bounds = geometry.prim_bounds(id);
-            (!bounds.is_empty()).then(|| BuildPrim {
-                bounds,
-                centroid: bounds.centroid(),
-                id,
-            })
+    let prim = |id| {
+        let bounds = geometry.prim_bounds(id);
+        (!bounds.is_empty()).then(|| BuildPrim {
+            bounds,
+            centroid: bounds.centroid(),
+            id,
         })
-        .collect()
+    };
+    let n = geometry.bounded_count();
+    if n > 65536 {
+        use rayon::prelude::*;
+        (0..n).into_par_iter().filter_map(prim).collect()
+    } else {
+        (0..n).filter_map(prim).collect()
+    }
 }
 
 /// Relative slack of `t_limit`.
@@ -351,6 +391,9 @@ pub enum Accel {
     Grid(Grid),
     /// The octree.
     Octree(Octree),
+    /// Embree (triangles) with candela's BVH (other primitives).
+    #[cfg(feature = "embree")]
+    Embree(Embree),
 }
 
 impl Accel {
@@ -361,13 +404,53 @@ impl Accel {
             AccelKind::Bvh => {
                 // Grown boxes: a primitive may report a hit that round-off puts a hair outside
                 // its exact box, which the list would still find.
-                let m = margin(&geometry.bounds());
-                let prims = build_prims(geometry).into_iter().map(|p| BuildPrim { bounds: inflate(p.bounds, m), ..p }).collect();
-                Accel::Bvh(Bvh::build(prims))
+                let mut prims = build_prims(geometry);
+                let m = margin(&prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(p.bounds)));
+                for p in &mut prims {
+                    p.bounds = inflate(p.bounds, m);
+                }
+                Accel::Bvh(Bvh::build(geometry, &prims))
             }
             AccelKind::KdTree => Accel::KdTree(KdTree::build(&build_prims(geometry))),
             AccelKind::Grid => Accel::Grid(Grid::build(&build_prims(geometry))),
             AccelKind::Octree => Accel::Octree(Octree::build(&build_prims(geometry))),
+            #[cfg(feature = "embree")]
+            AccelKind::Embree => Accel::Embree(Embree::build(geometry)),
+        }
+    }
+
+    /// Memory held by the structure, in bytes (for Embree: candela's part only).
+    pub fn memory(&self) -> usize {
+        match self {
+            Accel::List(_) => 0,
+            Accel::Bvh(b) => b.memory(),
+            Accel::KdTree(k) => k.memory(),
+            Accel::Grid(g) => g.memory(),
+            Accel::Octree(o) => o.memory(),
+            #[cfg(feature = "embree")]
+            Accel::Embree(_) => 0,
+        }
+    }
+
+    /// A one-line description of the structure's size.
+    pub fn describe(&self) -> String {
+        match self {
+            Accel::List(_) => "linear list".into(),
+            Accel::Bvh(b) => format!(
+                "{} nodes, {} triangle blocks",
+                b.node_count(),
+                b.block_count()
+            ),
+            Accel::KdTree(k) => format!(
+                "{} nodes, depth {}, {} refs",
+                k.node_count(),
+                k.depth(),
+                k.reference_count()
+            ),
+            Accel::Grid(g) => format!("{:?} cells, {} refs", g.resolution(), g.reference_count()),
+            Accel::Octree(o) => format!("{} nodes, {} refs", o.node_count(), o.reference_count()),
+            #[cfg(feature = "embree")]
+            Accel::Embree(_) => "Embree 3".into(),
         }
     }
 
@@ -380,6 +463,8 @@ impl Accel {
             Accel::KdTree(k) => k.intersect(geometry, ray, stats),
             Accel::Grid(g) => g.intersect(geometry, ray, stats),
             Accel::Octree(o) => o.intersect(geometry, ray, stats),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.intersect(geometry, ray, stats),
         }
     }
 
@@ -392,6 +477,8 @@ impl Accel {
             Accel::KdTree(k) => k.occluded(geometry, ray, stats),
             Accel::Grid(g) => g.occluded(geometry, ray, stats),
             Accel::Octree(o) => o.occluded(geometry, ray, stats),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.occluded(geometry, ray, stats),
         }
     }
 }
@@ -546,5 +633,24 @@ pub(crate) mod test_scenes {
                 "{ray:?}"
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::AccelKind;
+
+    #[test]
+    fn names_parse_with_clear_errors() {
+        for name in AccelKind::NAMES {
+            assert!(AccelKind::parse(name).is_ok(), "{name}");
+        }
+        #[cfg(not(feature = "embree"))]
+        assert!(AccelKind::parse("embree")
+            .unwrap_err()
+            .contains("built without embree"));
+        assert!(AccelKind::parse("quadtree")
+            .unwrap_err()
+            .contains("unknown"));
     }
 }

@@ -23,7 +23,13 @@ use crate::stats::RayStats;
 pub trait Integrator: Sync {
     /// The radiance arriving at the ray's origin from direction `-ray.d`. Implementations draw
     /// every random number from `sampler` and count the rays they trace in `stats`.
-    fn radiance(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, stats: &mut RayStats) -> Rgb;
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb;
 }
 
 /// Settings that integrators read (each ignores what it does not use).
@@ -66,18 +72,33 @@ pub enum IntegratorKind {
 
 impl IntegratorKind {
     /// The command-line names, in order.
-    pub const NAMES: &'static [&'static str] =
-        &["onoff", "flat", "normals", "depth", "local", "direct", "whitted", "path", "radiosity"];
+    pub const NAMES: &'static [&'static str] = &[
+        "onoff",
+        "flat",
+        "normals",
+        "depth",
+        "local",
+        "direct",
+        "whitted",
+        "path",
+        "radiosity",
+    ];
 
     /// Parses a command-line name.
     pub fn from_name(name: &str) -> Option<Self> {
         use IntegratorKind::*;
-        let all = [OnOff, Flat, Normals, Depth, Local, Direct, Whitted, Path, Radiosity];
+        let all = [
+            OnOff, Flat, Normals, Depth, Local, Direct, Whitted, Path, Radiosity,
+        ];
         Self::NAMES.iter().position(|&n| n == name).map(|i| all[i])
     }
 
     /// The integrator for `scene`, or why it cannot be built.
-    pub fn build(self, scene: &Scene, settings: &IntegratorSettings) -> Result<Box<dyn Integrator>, String> {
+    pub fn build(
+        self,
+        scene: &Scene,
+        settings: &IntegratorSettings,
+    ) -> Result<Box<dyn Integrator>, String> {
         match self {
             IntegratorKind::OnOff => Ok(Box::new(OnOff)),
             IntegratorKind::Flat => Ok(Box::new(Flat)),

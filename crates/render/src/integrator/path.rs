@@ -109,7 +109,8 @@ impl Integrator for Path {
 
             // Next-event estimation: one light, chosen uniformly.
             if !bsdf.is_delta() && light_pick > 0.0 {
-                let pick = sampler.next_index(scene.lights.len() as u32);
+                let n = scene.lights.len() as u32;
+                let pick = if n == 1 { 0 } else { sampler.next_index(n) };
                 let u = sampler.next_2d();
                 let light = &scene.lights[pick as usize];
                 if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u) {

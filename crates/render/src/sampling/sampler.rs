@@ -20,8 +20,9 @@ pub struct Sampler {
     spp: u32,
     /// The pixel's scrambling seed; `None` for an independent sampler.
     sobol: Option<u32>,
-    /// The sample being drawn.
+    /// The sample being drawn, and its index with the bits reversed.
     index: u32,
+    rindex: u32,
     /// The next dimension of the sample.
     dim: u32,
 }
@@ -36,6 +37,7 @@ impl Sampler {
             spp: spp.max(1),
             sobol: Some((h >> 32) as u32 ^ h as u32),
             index: 0,
+            rindex: 0,
             dim: 0,
         }
     }
@@ -48,6 +50,7 @@ impl Sampler {
             spp: 1,
             sobol: None,
             index: 0,
+            rindex: 0,
             dim: 0,
         }
     }
@@ -56,6 +59,7 @@ impl Sampler {
     #[inline]
     pub fn start_sample(&mut self, index: u32) {
         self.index = index;
+        self.rindex = index.reverse_bits();
         self.dim = 0;
     }
 
@@ -77,11 +81,10 @@ impl Sampler {
             Some(seed) => {
                 let s = hash_u32(seed, self.dim);
                 self.dim += 1;
-                let i = nested_uniform_scramble(self.index, s);
-                to_unit(nested_uniform_scramble(
-                    i.reverse_bits(),
-                    mix32(s ^ 0x5bd1_e995),
-                ))
+                // With R the bit reversal and i = R(LK(R(index))) the shuffled index, the van
+                // der Corput point R(i) scrambled is R(LK(i)).
+                let r = laine_karras(self.rindex, s);
+                to_unit(laine_karras(r.reverse_bits(), mix32(s ^ 0x5bd1_e995)).reverse_bits())
             }
             None => self.rng.next_f32(),
         }
@@ -94,9 +97,12 @@ impl Sampler {
             Some(seed) => {
                 let s = hash_u32(seed, self.dim);
                 self.dim += 2;
-                let i = nested_uniform_scramble(self.index, s);
-                let x = nested_uniform_scramble(i.reverse_bits(), mix32(s ^ 0x5bd1_e995));
-                let y = nested_uniform_scramble(sobol_dim1(i), mix32(s ^ 0x27d4_eb2f));
+                // The shuffled index is i = R(r) with r = LK(R(index)) (R: bit reversal). The
+                // scrambled points are R(LK(R(vdc(i)))) = R(LK(i)) and R(LK(R(sobol1(i)))) =
+                // R(LK(G(r))) with G = R∘sobol1∘R, so only three reversals remain.
+                let r = laine_karras(self.rindex, s);
+                let x = laine_karras(r.reverse_bits(), mix32(s ^ 0x5bd1_e995)).reverse_bits();
+                let y = laine_karras(sobol_dim1_reversed(r), mix32(s ^ 0x27d4_eb2f)).reverse_bits();
                 [to_unit(x), to_unit(y)]
             }
             None => {
@@ -117,12 +123,12 @@ impl Sampler {
     }
 }
 
-/// The second dimension of the Sobol sequence (direction numbers v_k = v_{k−1} ⊕ v_{k−1}/2),
-/// a byte of the index at a time.
+/// G = R∘sobol₁∘R, the second Sobol dimension conjugated by bit reversal: linear over GF(2),
+/// so it is the XOR of four byte tables. (The direction numbers of sobol₁ are
+/// v_k = v_{k−1} ⊕ v_{k−1}/2 from v_0 = 2³¹; bit b of the input maps to R(v_{31−b}).)
 #[inline]
-fn sobol_dim1(i: u32) -> u32 {
+fn sobol_dim1_reversed(r: u32) -> u32 {
     const fn table() -> [[u32; 256]; 4] {
-        // The direction numbers of bits 0..32.
         let mut v = [0u32; 32];
         v[0] = 1 << 31;
         let mut k = 1;
@@ -135,15 +141,15 @@ fn sobol_dim1(i: u32) -> u32 {
         while byte < 4 {
             let mut b = 0;
             while b < 256 {
-                let mut r = 0;
+                let mut acc = 0;
                 let mut bit = 0;
                 while bit < 8 {
                     if b & (1 << bit) != 0 {
-                        r ^= v[byte * 8 + bit];
+                        acc ^= v[31 - (byte * 8 + bit)].reverse_bits();
                     }
                     bit += 1;
                 }
-                t[byte][b] = r;
+                t[byte][b] = acc;
                 b += 1;
             }
             byte += 1;
@@ -151,10 +157,10 @@ fn sobol_dim1(i: u32) -> u32 {
         t
     }
     static TABLE: [[u32; 256]; 4] = table();
-    TABLE[0][(i & 0xff) as usize]
-        ^ TABLE[1][((i >> 8) & 0xff) as usize]
-        ^ TABLE[2][((i >> 16) & 0xff) as usize]
-        ^ TABLE[3][(i >> 24) as usize]
+    TABLE[0][(r & 0xff) as usize]
+        ^ TABLE[1][((r >> 8) & 0xff) as usize]
+        ^ TABLE[2][((r >> 16) & 0xff) as usize]
+        ^ TABLE[3][(r >> 24) as usize]
 }
 
 /// Laine and Karras' hash-based permutation, which only lets bits influence higher bits.
@@ -166,12 +172,6 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
     x ^= x.wrapping_mul(0xc7afe638);
     x ^= x.wrapping_mul(0x8d22f6e6);
     x
-}
-
-/// A nested uniform (Owen) scramble of the bits of `x`, from the most significant down.
-#[inline]
-fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
 
 /// A 32-bit integer hash with low bias (Chris Wellons' "lowbias32").

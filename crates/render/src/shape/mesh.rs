@@ -32,24 +32,45 @@ pub struct Mesh {
 /// The ray in the sheared space of the watertight test, computed once per ray.
 #[derive(Clone, Copy, Debug)]
 pub struct ShearedRay {
-    k: [usize; 3],
-    s: [f32; 3],
+    /// The axes that become x, y and z (z: the largest component of the direction).
+    pub(crate) k: [usize; 3],
+    /// The shear: d[kx]/d[kz], d[ky]/d[kz] and 1/d[kz].
+    pub(crate) s: [f32; 3],
 }
 
 impl ShearedRay {
     /// Precomputes the permutation and shear of `ray`.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
+        let k = Self::axes(ray);
+        let [kx, ky, kz] = k;
+        let dz = ray.d[kz];
+        Self {
+            k,
+            s: [ray.d[kx] / dz, ray.d[ky] / dz, 1.0 / dz],
+        }
+    }
+
+    /// The axes that become x, y and z: z along the largest component of the direction, x
+    /// and y swapped when it is negative (to keep the winding). The shear is then
+    /// `[d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz]]`.
+    #[inline]
+    pub(crate) fn axes(ray: &Ray) -> [usize; 3] {
         let kz = ray.d.max_dimension();
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         if ray.d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let dz = ray.d[kz];
+        [kx, ky, kz]
+    }
+
+    /// A stand-in for queries that test no triangle (analytic shapes ignore it).
+    #[inline(always)]
+    pub(crate) fn unused() -> Self {
         Self {
-            k: [kx, ky, kz],
-            s: [ray.d[kx] / dz, ray.d[ky] / dz, 1.0 / dz],
+            k: [0, 1, 2],
+            s: [0.0; 3],
         }
     }
 }
@@ -69,7 +90,11 @@ impl Mesh {
     #[inline]
     pub fn vertices(&self, i: u32) -> [Point3; 3] {
         let [a, b, c] = self.indices[i as usize];
-        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
     }
 
     /// Bounds of triangle `i`.
@@ -132,7 +157,11 @@ impl Mesh {
             // Solve [e1 e2] = [dpdu dpdv]·[[du1 du2],[dv1 dv2]] for dpdu.
             let (du1, du2, dv1, dv2) = (tb.x - ta.x, tc.x - ta.x, tb.y - ta.y, tc.y - ta.y);
             let det = du1 * dv2 - du2 * dv1;
-            let dpdu = if det.abs() > 1e-12 { (e1 * dv2 - e2 * dv1) / det } else { e1 };
+            let dpdu = if det.abs() > 1e-12 {
+                (e1 * dv2 - e2 * dv1) / det
+            } else {
+                e1
+            };
             (uv, dpdu)
         };
         LocalGeometry { p, n, ns, uv, dpdu }
@@ -166,7 +195,13 @@ impl Mesh {
 
 /// The watertight ray–triangle test. Returns `t` and (β, γ) in `uv`.
 #[inline]
-pub fn intersect_triangle(a: Point3, b: Point3, c: Point3, ray: &Ray, sr: &ShearedRay) -> Option<ShapeHit> {
+pub fn intersect_triangle(
+    a: Point3,
+    b: Point3,
+    c: Point3,
+    ray: &Ray,
+    sr: &ShearedRay,
+) -> Option<ShapeHit> {
     let [kx, ky, kz] = sr.k;
     let [sx, sy, sz] = sr.s;
     // Translate the vertices to the ray origin, then shear so that the ray runs along +z.
@@ -226,7 +261,11 @@ mod tests {
 
     #[test]
     fn hits_by_hand() {
-        let m = one(Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0));
+        let m = one(
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        );
         let r = Ray::new(Point3::new(0.25, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0));
         let h = hit(&m, &r).unwrap();
         assert_eq!(h.t, 2.0);
@@ -239,15 +278,30 @@ mod tests {
         let r = Ray::new(Point3::new(0.25, 0.5, -3.0), Vec3::new(0.0, 0.0, 1.0));
         assert_eq!(hit(&m, &r).unwrap().t, 3.0);
         // Outside the triangle, parallel to it, behind the ray.
-        assert!(hit(&m, &Ray::new(Point3::new(0.75, 0.75, 2.0), Vec3::new(0.0, 0.0, -1.0))).is_none());
+        assert!(hit(
+            &m,
+            &Ray::new(Point3::new(0.75, 0.75, 2.0), Vec3::new(0.0, 0.0, -1.0))
+        )
+        .is_none());
         assert!(hit(&m, &Ray::new(Point3::new(-1.0, 0.25, 0.0), Vec3::X)).is_none());
         assert!(hit(&m, &Ray::new(Point3::new(0.25, 0.25, 2.0), Vec3::Z)).is_none());
     }
 
     #[test]
     fn edges_and_vertices_count_as_inside() {
-        let m = one(Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0));
-        for (x, y) in [(0.5, 0.0), (0.0, 0.5), (0.5, 0.5), (0.0, 0.0), (1.0, 0.0), (0.0, 1.0)] {
+        let m = one(
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        );
+        for (x, y) in [
+            (0.5, 0.0),
+            (0.0, 0.5),
+            (0.5, 0.5),
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (0.0, 1.0),
+        ] {
             let r = Ray::new(Point3::new(x, y, 1.0), Vec3::new(0.0, 0.0, -1.0));
             assert!(hit(&m, &r).is_some(), "({x}, {y})");
         }
@@ -270,24 +324,42 @@ mod tests {
         for _ in 0..10_000 {
             let s = rng.next_f32();
             let target = Point3::new(s, s, 0.0);
-            let o = Point3::new(rng.next_f32() * 4.0 - 2.0, rng.next_f32() * 4.0 - 2.0, 1.0 + rng.next_f32());
+            let o = Point3::new(
+                rng.next_f32() * 4.0 - 2.0,
+                rng.next_f32() * 4.0 - 2.0,
+                1.0 + rng.next_f32(),
+            );
             let r = Ray::new(o, target - o);
             let sr = ShearedRay::new(&r);
-            assert!(m.intersect(0, &r, &sr).is_some() || m.intersect(1, &r, &sr).is_some(), "{r:?}");
+            assert!(
+                m.intersect(0, &r, &sr).is_some() || m.intersect(1, &r, &sr).is_some(),
+                "{r:?}"
+            );
         }
     }
 
     #[test]
     fn vertex_normals_and_uvs_are_interpolated() {
-        let mut m = one(Point3::new(0.0, 0.0, 0.0), Point3::new(2.0, 0.0, 0.0), Point3::new(0.0, 2.0, 0.0));
+        let mut m = one(
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(2.0, 0.0, 0.0),
+            Point3::new(0.0, 2.0, 0.0),
+        );
         m.normals = vec![
             Normal3::new(0.0, 0.0, 1.0),
             Normal3::new(1.0, 0.0, 0.0),
             Normal3::new(0.0, 1.0, 0.0),
         ];
-        m.uvs = vec![Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(0.0, 1.0)];
+        m.uvs = vec![
+            Point2::new(0.0, 0.0),
+            Point2::new(1.0, 0.0),
+            Point2::new(0.0, 1.0),
+        ];
         let g = m.geometry(0, 0.5, 0.0);
-        assert!(g.ns.to_vec().approx_eq(Vec3::new(1.0, 0.0, 1.0).normalize(), 1e-6));
+        assert!(g
+            .ns
+            .to_vec()
+            .approx_eq(Vec3::new(1.0, 0.0, 1.0).normalize(), 1e-6));
         assert_eq!((g.uv.x, g.uv.y), (0.5, 0.0));
         assert!(g.dpdu.approx_eq(Vec3::new(2.0, 0.0, 0.0), 1e-6));
         // Vertex normals pointing below flip the geometric normal to their side.
