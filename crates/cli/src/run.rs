@@ -56,12 +56,9 @@ fn outputs(args: &RenderArgs, default: &Path) -> Result<Vec<PathBuf>> {
 fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
     let accel = match &args.accel {
         None => AccelKind::default(),
-        Some(name) => AccelKind::from_name(name).with_context(|| {
-            format!(
-                "--accel '{name}': unknown acceleration structure (expected one of: {})",
-                AccelKind::NAMES.join(", ")
-            )
-        })?,
+        Some(name) => {
+            AccelKind::parse(name).map_err(|e| anyhow::anyhow!("--accel '{name}': {e}"))?
+        }
     };
     let mut defines = Vec::new();
     for d in &args.defines {
