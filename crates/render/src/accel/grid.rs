@@ -370,7 +370,7 @@ fn resolution(bounds: &Bounds3, n: usize) -> [u32; 3] {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_scenes::{check_against_list, parallelogram_scene, triangles};
+    use super::super::test_scenes::{self, agrees_with_list, triangles};
     use super::*;
     use crate::math::Point3;
 
@@ -419,31 +419,12 @@ mod tests {
         let r = Ray::new(Point3::new(-5.0, 0.2, 0.5), Vec3::X);
         assert!(gr.intersect(&g, &r, &mut st).is_none());
         assert!(st.nodes > 0 && st.prim_tests > 0);
-        check_against_list(
-            &g,
-            |g, r, st| gr.intersect(g, r, st),
-            |g, r, st| gr.occluded(g, r, st),
-        );
+        agrees_with_list(&g, &gr);
     }
 
     #[test]
-    fn ray_starting_inside_and_parallel_rays() {
-        let g = parallelogram_scene();
-        let gr = grid(&g);
-        let mut st = RayStats::default();
-        // Starts in the middle of the grid, parallel to x: hits the wall at x = 4.
-        let r = Ray::new(Point3::new(0.5, 0.5, 0.5), Vec3::X);
-        let h = gr.intersect(&g, &r, &mut st).unwrap();
-        assert_eq!(h.t, 3.5);
-        assert!(gr.occluded(&g, &r, &mut st));
-        let short = Ray { tmax: 3.0, ..r };
-        assert!(gr.intersect(&g, &short, &mut st).is_none());
-        assert!(!gr.occluded(&g, &short, &mut st));
-        check_against_list(
-            &g,
-            |g, r, st| gr.intersect(g, r, st),
-            |g, r, st| gr.occluded(g, r, st),
-        );
+    fn flat_primitives_rays_inside_and_parallel() {
+        test_scenes::flat_primitives_rays_inside_and_parallel(grid);
     }
 
     #[test]
@@ -469,38 +450,11 @@ mod tests {
         let mut st = RayStats::default();
         let r = Ray::new(Point3::new(-9.0, -0.5, 3.0), Vec3::new(0.1, 0.0, -1.0));
         assert_eq!(gr.intersect(&g, &r, &mut st).unwrap().prim, 0);
-        check_against_list(
-            &g,
-            |g, r, st| gr.intersect(g, r, st),
-            |g, r, st| gr.occluded(g, r, st),
-        );
+        agrees_with_list(&g, &gr);
     }
 
     #[test]
     fn empty_single_and_identical() {
-        let g = triangles(&[]);
-        let gr = grid(&g);
-        let mut st = RayStats::default();
-        assert!(gr
-            .intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
-            .is_none());
-        let t = [
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(0.0, 1.0, 0.0),
-        ];
-        for n in [1, 7, 300] {
-            let g = triangles(&vec![t; n]);
-            let gr = grid(&g);
-            let h = gr
-                .intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st)
-                .unwrap();
-            assert_eq!((h.prim, h.t), (0, 1.0));
-            check_against_list(
-                &g,
-                |g, r, st| gr.intersect(g, r, st),
-                |g, r, st| gr.occluded(g, r, st),
-            );
-        }
+        test_scenes::empty_single_and_identical(grid, &[1, 7, 300]);
     }
 }

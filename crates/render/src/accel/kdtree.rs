@@ -530,7 +530,7 @@ fn binned(ctx: &Ctx, bounds: &Bounds3, list: &[u32]) -> Option<Split> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_scenes::{check_against_list, parallelogram_scene, triangles};
+    use super::super::test_scenes::{self, agrees_with_list, triangles};
     use super::*;
     use crate::math::{Point3, Vec3};
 
@@ -581,26 +581,12 @@ mod tests {
             crate::accel::List::new(&g).intersect(&g, &r, &mut st)
         );
         assert!(st.nodes > 0 && st.prim_tests > 0);
-        check_against_list(
-            &g,
-            |g, r, st| k.intersect(g, r, st),
-            |g, r, st| k.occluded(g, r, st),
-        );
+        agrees_with_list(&g, &k);
     }
 
     #[test]
     fn flat_primitives_rays_inside_and_parallel() {
-        let g = parallelogram_scene();
-        let k = kdtree(&g);
-        let mut st = RayStats::default();
-        let r = Ray::new(Point3::new(0.5, 0.5, 0.5), Vec3::X);
-        assert_eq!(k.intersect(&g, &r, &mut st).unwrap().t, 3.5);
-        assert!(!k.occluded(&g, &Ray { tmax: 3.0, ..r }, &mut st));
-        check_against_list(
-            &g,
-            |g, r, st| k.intersect(g, r, st),
-            |g, r, st| k.occluded(g, r, st),
-        );
+        test_scenes::flat_primitives_rays_inside_and_parallel(kdtree);
     }
 
     #[test]
@@ -632,11 +618,7 @@ mod tests {
             )
             .unwrap();
         assert_eq!(h.prim, 60);
-        check_against_list(
-            &g,
-            |g, r, st| k.intersect(g, r, st),
-            |g, r, st| k.occluded(g, r, st),
-        );
+        agrees_with_list(&g, &k);
     }
 
     #[test]
@@ -665,39 +647,11 @@ mod tests {
         assert!(
             k.depth() > 8 && k.depth() <= 8 + (1.3 * (tris.len() as f32).log2()).round() as usize
         );
-        check_against_list(
-            &g,
-            |g, r, st| k.intersect(g, r, st),
-            |g, r, st| k.occluded(g, r, st),
-        );
+        agrees_with_list(&g, &k);
     }
 
     #[test]
     fn empty_single_and_identical() {
-        let g = triangles(&[]);
-        let k = kdtree(&g);
-        let mut st = RayStats::default();
-        assert!(k
-            .intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
-            .is_none());
-        assert!(!k.occluded(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st));
-        let t = [
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(0.0, 1.0, 0.0),
-        ];
-        for n in [1, 2, 300] {
-            let g = triangles(&vec![t; n]);
-            let k = kdtree(&g);
-            let h = k
-                .intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st)
-                .unwrap();
-            assert_eq!((h.prim, h.t), (0, 1.0));
-            check_against_list(
-                &g,
-                |g, r, st| k.intersect(g, r, st),
-                |g, r, st| k.occluded(g, r, st),
-            );
-        }
+        test_scenes::empty_single_and_identical(kdtree, &[1, 2, 300]);
     }
 }

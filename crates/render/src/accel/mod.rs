@@ -560,6 +560,83 @@ pub(crate) mod test_scenes {
         Geometry::new(objects, Vec::new())
     }
 
+    /// What the shared tests need of a structure.
+    pub trait Structure {
+        /// The closest hit.
+        fn hit(&self, g: &Geometry, r: &Ray, st: &mut RayStats) -> Option<Hit>;
+        /// Any hit.
+        fn occ(&self, g: &Geometry, r: &Ray, st: &mut RayStats) -> bool;
+    }
+
+    macro_rules! structures {
+        ($($t:ty),*) => {$(
+            impl Structure for $t {
+                fn hit(&self, g: &Geometry, r: &Ray, st: &mut RayStats) -> Option<Hit> {
+                    self.intersect(g, r, st)
+                }
+                fn occ(&self, g: &Geometry, r: &Ray, st: &mut RayStats) -> bool {
+                    self.occluded(g, r, st)
+                }
+            }
+        )*};
+    }
+    structures!(
+        super::Bvh,
+        super::KdTree,
+        super::Grid,
+        super::Octree,
+        List,
+        super::Accel
+    );
+
+    /// [`check_against_list`] for a structure.
+    pub fn agrees_with_list(g: &Geometry, s: &impl Structure) {
+        check_against_list(g, |g, r, st| s.hit(g, r, st), |g, r, st| s.occ(g, r, st));
+    }
+
+    /// [`parallelogram_scene`]: a ray from inside, parallel to x, hits the wall at x = 4 (and
+    /// not when it stops short); then the comparison with the list.
+    pub fn flat_primitives_rays_inside_and_parallel<S: Structure>(build: impl Fn(&Geometry) -> S) {
+        let g = parallelogram_scene();
+        let s = build(&g);
+        let mut st = RayStats::default();
+        let r = Ray::new(Point3::new(0.5, 0.5, 0.5), Vec3::X);
+        assert_eq!(s.hit(&g, &r, &mut st).unwrap().t, 3.5);
+        assert!(s.occ(&g, &r, &mut st));
+        let short = Ray { tmax: 3.0, ..r };
+        assert!(s.hit(&g, &short, &mut st).is_none());
+        assert!(!s.occ(&g, &short, &mut st));
+        agrees_with_list(&g, &s);
+    }
+
+    /// An empty scene, then `counts` copies of one triangle: the first copy wins the tie.
+    pub fn empty_single_and_identical<S: Structure>(
+        build: impl Fn(&Geometry) -> S,
+        counts: &[usize],
+    ) {
+        let g = triangles(&[]);
+        let s = build(&g);
+        let mut st = RayStats::default();
+        assert!(s
+            .hit(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
+            .is_none());
+        assert!(!s.occ(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st));
+        let t = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(1.0, 0.0, 0.0),
+            Point3::new(0.0, 1.0, 0.0),
+        ];
+        for &n in counts {
+            let g = triangles(&vec![t; n]);
+            let s = build(&g);
+            let h = s
+                .hit(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st)
+                .unwrap();
+            assert_eq!((h.prim, h.t), (0, 1.0));
+            agrees_with_list(&g, &s);
+        }
+    }
+
     /// Compares `intersect` and `occluded` with the list on many rays: random, along the axes
     /// from points on a lattice (through edges, vertices and flat primitives), and aimed at
     /// the corners of the primitives' boxes.

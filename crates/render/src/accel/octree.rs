@@ -340,7 +340,7 @@ impl Octree {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_scenes::{check_against_list, parallelogram_scene, triangles};
+    use super::super::test_scenes::{self, agrees_with_list, triangles};
     use super::*;
     use crate::math::Vec3;
 
@@ -376,26 +376,12 @@ mod tests {
             .intersect(&g, &Ray::new(Point3::new(-1.0, 0.1, 0.1), Vec3::X), &mut st)
             .is_none());
         assert!(st.nodes > 0 && st.prim_tests > 0);
-        check_against_list(
-            &g,
-            |g, r, st| o.intersect(g, r, st),
-            |g, r, st| o.occluded(g, r, st),
-        );
+        agrees_with_list(&g, &o);
     }
 
     #[test]
     fn flat_primitives_rays_inside_and_parallel() {
-        let g = parallelogram_scene();
-        let o = octree(&g);
-        let mut st = RayStats::default();
-        let r = Ray::new(Point3::new(0.5, 0.5, 0.5), Vec3::X);
-        assert_eq!(o.intersect(&g, &r, &mut st).unwrap().t, 3.5);
-        assert!(!o.occluded(&g, &Ray { tmax: 3.0, ..r }, &mut st));
-        check_against_list(
-            &g,
-            |g, r, st| o.intersect(g, r, st),
-            |g, r, st| o.occluded(g, r, st),
-        );
+        test_scenes::flat_primitives_rays_inside_and_parallel(octree);
     }
 
     #[test]
@@ -419,39 +405,11 @@ mod tests {
             )
             .unwrap();
         assert_eq!(h.prim, 40);
-        check_against_list(
-            &g,
-            |g, r, st| o.intersect(g, r, st),
-            |g, r, st| o.occluded(g, r, st),
-        );
+        agrees_with_list(&g, &o);
     }
 
     #[test]
     fn empty_single_and_identical() {
-        let g = triangles(&[]);
-        let o = octree(&g);
-        let mut st = RayStats::default();
-        assert!(o
-            .intersect(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st)
-            .is_none());
-        assert!(!o.occluded(&g, &Ray::new(Point3::ORIGIN, Vec3::X), &mut st));
-        let t = [
-            Point3::new(0.0, 0.0, 0.0),
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(0.0, 1.0, 0.0),
-        ];
-        for n in [1, 9, 300] {
-            let g = triangles(&vec![t; n]);
-            let o = octree(&g);
-            let h = o
-                .intersect(&g, &Ray::new(Point3::new(0.1, 0.1, 1.0), -Vec3::Z), &mut st)
-                .unwrap();
-            assert_eq!((h.prim, h.t), (0, 1.0));
-            check_against_list(
-                &g,
-                |g, r, st| o.intersect(g, r, st),
-                |g, r, st| o.occluded(g, r, st),
-            );
-        }
+        test_scenes::empty_single_and_identical(octree, &[1, 9, 300]);
     }
 }
