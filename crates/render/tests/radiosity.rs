@@ -7,14 +7,14 @@ use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
 use candela_render::integrator::{IntegratorKind, IntegratorSettings, Path};
 use candela_render::light::{Components, Light, PointLight};
-use candela_render::material::{Material, Model};
+use candela_render::material::Material;
 use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::radiosity::{
     CacheStatus, DisplayMode, FormFactorMatrix, FormFactorMethod, PatchInfo, Radiosity,
     RadiosityOptions, RadiosityOutbox, Side, SolverKind,
 };
 use candela_render::scene::Emission;
-use candela_render::shape::{Disk, Mesh, Parallelogram, Shape, Sphere};
+use candela_render::shape::{Disk, Mesh, Shape, Sphere};
 use candela_render::texture::Texture;
 use candela_render::{Rgb, Scene, SceneBuilder};
 use radiosity_support::*;
@@ -34,17 +34,6 @@ fn ff_opts(method: FormFactorMethod, patch: f32) -> RadiosityOptions {
         cull_hidden_sides: false,
         ..Default::default()
     }
-}
-
-fn para(p: [f32; 3], v: [f32; 3], w: [f32; 3]) -> Shape {
-    Shape::Parallelogram(
-        Parallelogram::new(
-            Point3::new(p[0], p[1], p[2]),
-            Vec3::new(v[0], v[1], v[2]),
-            Vec3::new(w[0], w[1], w[2]),
-        )
-        .unwrap(),
-    )
 }
 
 /// The form factor from the side of primitive `a` facing point `towards` to primitive `b`:
@@ -211,36 +200,12 @@ fn differential_patch_to_a_coaxial_disk() {
 /// A closed box of six two-sided parallelograms [-1, 1]³; the walls emit `le` (both sides)
 /// and reflect `rho`.
 fn closed_box(rho: f32, le: f32) -> Scene {
-    let mut b = SceneBuilder::new();
-    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(rho))));
-    let e = (le > 0.0).then(|| {
-        b.add_emission(Emission {
-            radiance: Texture::Uniform(Rgb::new(le, 0.5 * le, 0.25 * le)),
-            two_sided: true,
-        })
-    });
-    let walls = [
-        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        ([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        ([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        ([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-        ([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-    ];
-    for (p, v, w) in walls {
-        b.add_shape(para(p, v, w), m, e);
-    }
     // Inside, looking along +x: the eye is d = 1 behind the camera's origin, at (−0.5, 0.1, 0.05).
-    b.camera(Camera::perspective(
-        1.0,
-        1.0,
-        Transform::translation(Vec3::new(0.5, 0.1, 0.05)),
-    ));
-    b.build(AccelKind::Bvh)
-}
-
-fn inward(p: &PatchInfo) -> bool {
-    p.normal.dot(Point3::ORIGIN - p.centre) > 0.0
+    closed_box_with(
+        rho,
+        (le > 0.0).then(|| Rgb::new(le, 0.5 * le, 0.25 * le)),
+        Vec3::new(0.5, 0.1, 0.05),
+    )
 }
 
 #[test]
@@ -784,22 +749,8 @@ fn spheres_and_meshes_are_tessellated_into_patches() {
 
 #[test]
 fn mirrors_are_traced_and_glossy_materials_use_their_diffuse_part() {
-    let base = cornell(AccelKind::Bvh);
-    let mut b = SceneBuilder::new();
-    for mat in &base.materials {
-        b.add_material(mat.clone());
-    }
-    let mirror = b.add_material(Material::two_sided(Model::Specular {
-        reflectance: Texture::Uniform(Rgb::splat(0.9)),
-    }));
-    let e = b.add_emission(base.emissions[0].clone());
-    for (i, o) in base.geometry.objects().iter().enumerate() {
-        // The tall box becomes a mirror.
-        let mat = if i == 7 { mirror } else { o.props.material };
-        b.add_shape(o.shape.clone(), mat, o.props.emission.map(|_| e));
-    }
-    b.camera(base.camera);
-    let scene = b.build(AccelKind::Bvh);
+    // The tall box (object 7) is a mirror.
+    let scene = cornell_with_mirror();
     for method in METHODS {
         let r = Radiosity::solve(
             &scene,
@@ -824,10 +775,7 @@ fn mirrors_are_traced_and_glossy_materials_use_their_diffuse_part() {
         let (mut seen, mut lit) = (0, 0);
         for y in 0..res {
             for x in 0..res {
-                let ray = scene.camera.ray(
-                    (x as f32 + 0.5) / res as f32,
-                    1.0 - (y as f32 + 0.5) / res as f32,
-                );
+                let ray = pixel_ray(&scene, res, x, y);
                 if scene.intersect(&ray, &mut st).is_some_and(|h| h.prim == 7) {
                     seen += 1;
                     lit += (img.get(x, y).r > 0.0) as usize;

@@ -7,6 +7,7 @@ mod radiosity_support;
 use candela_render::accel::AccelKind;
 use candela_render::integrator::Path;
 use candela_render::radiosity::{FormFactorMethod, Radiosity, RadiosityOptions, SolverKind};
+use candela_render::Scene;
 use radiosity_support::*;
 use std::time::Instant;
 
@@ -25,9 +26,26 @@ fn opts(
     }
 }
 
+/// A configuration of [`configs`] as options (Gauss–Seidel).
+fn config_opts(&(ff, h, r, hres): &Config) -> RadiosityOptions {
+    let mut o = opts(h, ff, SolverKind::GaussSeidel, r);
+    o.hemicube_resolution = hres;
+    o
+}
+
+/// Solves `scene`, with the seconds it took.
+fn timed_solve(scene: &Scene, o: &RadiosityOptions) -> (Radiosity, f64) {
+    let t = Instant::now();
+    let rad = Radiosity::solve(scene, o);
+    (rad, t.elapsed().as_secs_f64())
+}
+
+/// Method, patch size, refinements, hemicube resolution.
+type Config = (FormFactorMethod, Option<f32>, u32, u32);
+
 /// The configurations of `cornell_means`: (method, patch size, refinements, hemicube
 /// resolution), from `RAD_CONFIGS` ("hc:0.14:0:256,rc:0.07:2:0") or a default list.
-fn configs() -> Vec<(FormFactorMethod, Option<f32>, u32, u32)> {
+fn configs() -> Vec<Config> {
     let text = std::env::var("RAD_CONFIGS")
         .unwrap_or_else(|_| "hc:-:0:256,hc:-:2:256,hc:0.07:0:256,rc:-:0:0,rc:0.07:0:0".into());
     text.split(',')
@@ -61,12 +79,9 @@ fn cornell_means() {
         "path tracer {res}x{res}x256: {pm:.4?} ({:.1} s)",
         t.elapsed().as_secs_f64()
     );
-    for (ff, h, r, hres) in configs() {
-        let mut o = opts(h, ff, SolverKind::GaussSeidel, r);
-        o.hemicube_resolution = hres;
-        let t = Instant::now();
-        let rad = Radiosity::solve(&scene, &o);
-        let ts = t.elapsed().as_secs_f64();
+    for cfg in configs() {
+        let (ff, _, r, hres) = cfg;
+        let (rad, ts) = timed_solve(&scene, &config_opts(&cfg));
         let img = image(&scene, &rad, res, 1);
         let m = masked_mean(&img, &mask);
         let rel: Vec<String> = (0..3)
@@ -169,9 +184,7 @@ fn cornell_profile() {
     if let Ok(r) = std::env::var("RAD_CACHE_MB") {
         o.row_cache_bytes = r.parse::<usize>().unwrap() << 20;
     }
-    let t = Instant::now();
-    let rad = Radiosity::solve(&scene, &o);
-    let secs = t.elapsed().as_secs_f64();
+    let (rad, secs) = timed_solve(&scene, &o);
     let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
     let hwm = status
         .lines()
@@ -198,9 +211,8 @@ fn cornell_profile() {
 #[ignore]
 fn cornell_images() {
     let scene = cornell(AccelKind::Bvh);
-    for (k, (ff, h, r, hres)) in configs().into_iter().enumerate() {
-        let mut o = opts(h, ff, SolverKind::GaussSeidel, r);
-        o.hemicube_resolution = hres;
+    for (k, cfg) in configs().iter().enumerate() {
+        let mut o = config_opts(cfg);
         if std::env::var("RAD_FLAT").is_ok() {
             o.display = candela_render::radiosity::DisplayMode::Flat;
         }
@@ -218,38 +230,11 @@ fn cornell_images() {
 #[test]
 #[ignore]
 fn furnace_debug() {
-    let mut b = candela_render::SceneBuilder::new();
-    let m = b.add_material(candela_render::material::Material::diffuse(
-        candela_render::texture::Texture::Uniform(candela_render::Rgb::splat(0.6)),
-    ));
-    let e = b.add_emission(candela_render::scene::Emission {
-        radiance: candela_render::texture::Texture::Uniform(candela_render::Rgb::splat(1.0)),
-        two_sided: true,
-    });
-    use candela_render::math::{Point3, Transform, Vec3};
-    let walls = [
-        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        ([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        ([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        ([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-        ([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-    ];
-    for (p, v, w) in walls {
-        let s = candela_render::shape::Parallelogram::new(
-            Point3::new(p[0], p[1], p[2]),
-            Vec3::new(v[0], v[1], v[2]),
-            Vec3::new(w[0], w[1], w[2]),
-        )
-        .unwrap();
-        b.add_shape(candela_render::shape::Shape::Parallelogram(s), m, Some(e));
-    }
-    b.camera(candela_render::camera::Camera::perspective(
-        1.0,
-        1.0,
-        Transform::translation(Vec3::new(-0.5, 0.1, 0.05)),
-    ));
-    let scene = b.build(AccelKind::Bvh);
+    let scene = closed_box_with(
+        0.6,
+        Some(candela_render::Rgb::splat(1.0)),
+        candela_render::math::Vec3::new(-0.5, 0.1, 0.05),
+    );
     let o = RadiosityOptions {
         patch_size: Some(0.4),
         refinements: 0,
@@ -310,23 +295,7 @@ fn point_light_debug() {
 #[test]
 #[ignore]
 fn mirror_debug() {
-    let base = cornell(AccelKind::Bvh);
-    let mut b = candela_render::SceneBuilder::new();
-    for mat in &base.materials {
-        b.add_material(mat.clone());
-    }
-    let mirror = b.add_material(candela_render::material::Material::two_sided(
-        candela_render::material::Model::Specular {
-            reflectance: candela_render::texture::Texture::Uniform(candela_render::Rgb::splat(0.9)),
-        },
-    ));
-    let e = b.add_emission(base.emissions[0].clone());
-    for (i, o) in base.geometry.objects().iter().enumerate() {
-        let mat = if i == 7 { mirror } else { o.props.material };
-        b.add_shape(o.shape.clone(), mat, o.props.emission.map(|_| e));
-    }
-    b.camera(base.camera);
-    let scene = b.build(AccelKind::Bvh);
+    let scene = cornell_with_mirror();
     let r = Radiosity::solve(
         &scene,
         &RadiosityOptions {
@@ -343,38 +312,11 @@ fn mirror_debug() {
 #[test]
 #[ignore]
 fn furnace_errors() {
-    use candela_render::math::{Point3, Transform, Vec3};
-    let mut b = candela_render::SceneBuilder::new();
-    let m = b.add_material(candela_render::material::Material::diffuse(
-        candela_render::texture::Texture::Uniform(candela_render::Rgb::splat(0.6)),
-    ));
-    let e = b.add_emission(candela_render::scene::Emission {
-        radiance: candela_render::texture::Texture::Uniform(candela_render::Rgb::splat(1.0)),
-        two_sided: true,
-    });
-    let walls = [
-        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        ([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
-        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        ([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
-        ([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-        ([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
-    ];
-    for (p, v, w) in walls {
-        let s = candela_render::shape::Parallelogram::new(
-            Point3::new(p[0], p[1], p[2]),
-            Vec3::new(v[0], v[1], v[2]),
-            Vec3::new(w[0], w[1], w[2]),
-        )
-        .unwrap();
-        b.add_shape(candela_render::shape::Shape::Parallelogram(s), m, Some(e));
-    }
-    b.camera(candela_render::camera::Camera::perspective(
-        1.0,
-        1.0,
-        Transform::translation(Vec3::new(0.5, 0.1, 0.05)),
-    ));
-    let scene = b.build(AccelKind::Bvh);
+    let scene = closed_box_with(
+        0.6,
+        Some(candela_render::Rgb::splat(1.0)),
+        candela_render::math::Vec3::new(0.5, 0.1, 0.05),
+    );
     for ff in [FormFactorMethod::Hemicube, FormFactorMethod::RayCast] {
         for h in [0.5f32, 0.4, 0.25, 0.125] {
             for res in [128u32, 256] {
@@ -391,7 +333,7 @@ fn furnace_errors() {
                 let mut mean = 0f64;
                 let mut n = 0;
                 for p in r.patches() {
-                    if p.normal.dot(Point3::ORIGIN - p.centre) > 0.0 {
+                    if inward(&p) {
                         let d = (p.radiosity[0] / (p.emission[0] / 0.4) - 1.0).abs();
                         worst = worst.max(d);
                         mean += d;
@@ -436,12 +378,9 @@ fn cornell_against_mitsuba_reference() {
         100.0 * (pm[2] / rm[2] - 1.0),
         t.elapsed().as_secs_f64()
     );
-    for (ff, h, r, hres) in configs() {
-        let mut o = opts(h, ff, SolverKind::GaussSeidel, r);
-        o.hemicube_resolution = hres;
-        let t = Instant::now();
-        let rad = Radiosity::solve(&scene, &o);
-        let ts = t.elapsed().as_secs_f64();
+    for cfg in configs() {
+        let (ff, _, r, _) = cfg;
+        let (rad, ts) = timed_solve(&scene, &config_opts(&cfg));
         // 16 samples per pixel: antialiased emitter edges, as in the reference.
         let m = masked_mean(&image(&scene, &rad, res, 16), &mask);
         println!(
@@ -463,10 +402,7 @@ fn cornell_against_mitsuba_reference() {
 #[ignore]
 fn cornell_difference_image() {
     let scene = cornell(AccelKind::Bvh);
-    let (ff, h, r, hres) = configs()[0];
-    let mut o = opts(h, ff, SolverKind::GaussSeidel, r);
-    o.hemicube_resolution = hres;
-    let rad = Radiosity::solve(&scene, &o);
+    let rad = Radiosity::solve(&scene, &config_opts(&configs()[0]));
     write_pfm("/tmp/rad_256.pfm", &image(&scene, &rad, 256, 16));
 }
 

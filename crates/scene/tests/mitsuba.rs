@@ -68,6 +68,13 @@ fn error_of(xml: &str) -> String {
     }
 }
 
+/// Asserts that `xml` gives an error (`line:col: message`) starting with `prefix`.
+#[track_caller]
+fn assert_error_starts_with(xml: &str, prefix: &str) {
+    let e = error_of(xml);
+    assert!(e.starts_with(prefix), "{e}");
+}
+
 fn close(a: Vec3, b: Vec3) -> bool {
     a.approx_eq(b, 1e-4)
 }
@@ -211,20 +218,21 @@ fn film_sampler_and_integrator_hints() {
         l.warnings
     );
     // Errors with positions.
-    let e = error_of(&scene(
-        r#"<integrator type="path"><integer name="max_depth" value="-2"/></integrator>"#,
-    ));
-    assert!(e.starts_with("2:25: 'max_depth' must be between -1"), "{e}");
-    let e = error_of(&scene(
-        r#"<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="0"/></film></sensor>"#,
-    ));
-    assert!(e.starts_with("2:49: 'width' must be between 1"), "{e}");
-    let e = error_of(&scene(
-        r#"<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="99999999999999999999"/></film></sensor>"#,
-    ));
-    assert!(
-        e.starts_with("2:78: '99999999999999999999' is out of range"),
-        "{e}"
+    assert_error_starts_with(
+        &scene(r#"<integrator type="path"><integer name="max_depth" value="-2"/></integrator>"#),
+        "2:25: 'max_depth' must be between -1",
+    );
+    assert_error_starts_with(
+        &scene(
+            r#"<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="0"/></film></sensor>"#,
+        ),
+        "2:49: 'width' must be between 1",
+    );
+    assert_error_starts_with(
+        &scene(
+            r#"<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="99999999999999999999"/></film></sensor>"#,
+        ),
+        "2:78: '99999999999999999999' is out of range",
     );
     // An unknown integrator is only a warning (the scene renders with the path tracer).
     let l = load(&scene(r#"<integrator type="bdpt"/>"#));
@@ -285,10 +293,12 @@ fn defaults_substitution_and_overrides() {
     ));
     assert_eq!(e, "2:54: undefined parameter $nope (define it with <default name=\"nope\" value=\"…\"/> or -d nope=…)");
     // A <default> only applies after it.
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><float name="radius" value="$r"/></shape><default name="r" value="1"/>"#,
-    ));
-    assert!(e.starts_with("2:50: undefined parameter $r"), "{e}");
+    assert_error_starts_with(
+        &scene(
+            r#"<shape type="sphere"><float name="radius" value="$r"/></shape><default name="r" value="1"/>"#,
+        ),
+        "2:50: undefined parameter $r",
+    );
 }
 
 /// The transformation of the only sphere.
@@ -351,10 +361,12 @@ fn transforms_compose_in_order() {
         r#"<shape type="sphere"><transform name="to_world"><matrix value="1 2 3"/></transform></shape>"#,
     ));
     assert_eq!(e, "2:64: a matrix needs 9 or 16 numbers, not 3");
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><transform name="to_world"><lookat origin="0,0,0" target="0,0,0"/></transform></shape>"#,
-    ));
-    assert!(e.starts_with("2:49: invalid <lookat>"), "{e}");
+    assert_error_starts_with(
+        &scene(
+            r#"<shape type="sphere"><transform name="to_world"><lookat origin="0,0,0" target="0,0,0"/></transform></shape>"#,
+        ),
+        "2:49: invalid <lookat>",
+    );
     let e = error_of(&scene(r#"<shape type="sphere"><translate x="1"/></shape>"#));
     assert_eq!(e, "2:22: <translate> can only appear inside a <transform>");
 }
@@ -409,28 +421,35 @@ fn analytic_shapes() {
     let g = l.scene.geometry.meshes()[0].geometry(0, 0.2, 0.2);
     assert!(g.n.to_vec().approx_eq(Vec3::Z, 1e-6), "{:?}", g.n);
     // Errors.
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><float name="radius" value="-1"/></shape>"#,
-    ));
-    assert_eq!(e, "2:22: the radius must be positive, not -1");
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><float name="radius" value="nan"/></shape>"#,
-    ));
-    assert_eq!(e, "2:50: 'nan' is not a finite number");
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><float name="radius" value="1e999"/></shape>"#,
-    ));
-    assert_eq!(e, "2:50: '1e999' is not a finite number");
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><integer name="radius" value="x"/></shape>"#,
-    ));
-    assert_eq!(e, "2:52: 'x' is not an integer");
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><string name="radius" value="1"/></shape>"#,
-    ));
-    assert_eq!(e, "2:22: 'radius' must be a number, not a string");
-    let e = error_of(&scene(r#"<shape type="teapot"/>"#));
-    assert!(e.starts_with("2:1: unsupported shape 'teapot'"), "{e}");
+    for (radius, expected) in [
+        (
+            r#"<float name="radius" value="-1"/>"#,
+            "2:22: the radius must be positive, not -1",
+        ),
+        (
+            r#"<float name="radius" value="nan"/>"#,
+            "2:50: 'nan' is not a finite number",
+        ),
+        (
+            r#"<float name="radius" value="1e999"/>"#,
+            "2:50: '1e999' is not a finite number",
+        ),
+        (
+            r#"<integer name="radius" value="x"/>"#,
+            "2:52: 'x' is not an integer",
+        ),
+        (
+            r#"<string name="radius" value="1"/>"#,
+            "2:22: 'radius' must be a number, not a string",
+        ),
+    ] {
+        let e = error_of(&scene(&format!(r#"<shape type="sphere">{radius}</shape>"#)));
+        assert_eq!(e, expected);
+    }
+    assert_error_starts_with(
+        &scene(r#"<shape type="teapot"/>"#),
+        "2:1: unsupported shape 'teapot'",
+    );
     // An unknown parameter is a warning at its position.
     let l = load(&scene(
         r#"<shape type="sphere"><float name="radiuss" value="2"/></shape>"#,
@@ -612,40 +631,37 @@ fn bsdfs_and_presets() {
     let o = l.scene.geometry.objects();
     assert_eq!(o[0].props.material, o[1].props.material);
     // Errors.
-    let e = error_of(&bsdf(
-        r#"<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>"#,
-    ));
-    assert!(
-        e.starts_with("2:45: unknown conductor material 'Unobtainium' (known: none, a-C, Ag, Al"),
-        "{e}"
+    assert_error_starts_with(
+        &bsdf(r#"<bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf>"#),
+        "2:45: unknown conductor material 'Unobtainium' (known: none, a-C, Ag, Al",
     );
-    let e = error_of(&bsdf(
-        r#"<bsdf type="dielectric"><string name="int_ior" value="glas"/></bsdf>"#,
-    ));
-    assert!(
-        e.starts_with("2:46: unknown index of refraction 'glas'"),
-        "{e}"
+    assert_error_starts_with(
+        &bsdf(r#"<bsdf type="dielectric"><string name="int_ior" value="glas"/></bsdf>"#),
+        "2:46: unknown index of refraction 'glas'",
     );
-    let e = error_of(&bsdf(
-        r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
-    ));
-    assert!(e.starts_with("2:50: anisotropic roughness"), "{e}");
-    let e = error_of(&bsdf(r#"<bsdf type="principled"/>"#));
-    assert!(e.starts_with("2:22: unsupported BSDF 'principled'"), "{e}");
+    assert_error_starts_with(
+        &bsdf(
+            r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+        ),
+        "2:50: anisotropic roughness",
+    );
+    assert_error_starts_with(
+        &bsdf(r#"<bsdf type="principled"/>"#),
+        "2:22: unsupported BSDF 'principled'",
+    );
     let e = error_of(&bsdf(r#"<ref id="nothing"/>"#));
     assert_eq!(e, "2:31: unknown id 'nothing'");
-    let e = error_of(&scene(
-        r#"<bsdf type="twosided" id="a"><ref id="a"/></bsdf>"#,
-    ));
-    assert!(e.starts_with("2:1: circular reference"), "{e}");
+    assert_error_starts_with(
+        &scene(r#"<bsdf type="twosided" id="a"><ref id="a"/></bsdf>"#),
+        "2:1: circular reference",
+    );
     let e = error_of(&scene(
         r#"<bsdf type="diffuse" id="a"/><bsdf type="diffuse" id="a"/>"#,
     ));
     assert_eq!(e, "2:55: the id 'a' is already used (line 2)");
-    let e = error_of(&bsdf(r#"<bsdf type="diffuse"/><bsdf type="diffuse"/>"#));
-    assert!(
-        e.starts_with("2:44: <shape type=\"sphere\"> takes a single <bsdf>"),
-        "{e}"
+    assert_error_starts_with(
+        &bsdf(r#"<bsdf type="diffuse"/><bsdf type="diffuse"/>"#),
+        "2:44: <shape type=\"sphere\"> takes a single <bsdf>",
     );
 }
 
@@ -711,12 +727,9 @@ fn textures() {
     assert_eq!(e.pos.map(|p| (p.line, p.col)), Some((2, 24)));
     let e = error_of(&scene(r#"<texture type="bitmap"/>"#));
     assert_eq!(e, "2:1: bitmap needs a 'filename'");
-    let e = error_of(&bsdf(
-        r#"<bsdf type="diffuse"><bsdf type="diffuse" name="reflectance"/></bsdf>"#,
-    ));
-    assert!(
-        e.starts_with("2:43: 'reflectance' must be a colour or a <texture>"),
-        "{e}"
+    assert_error_starts_with(
+        &bsdf(r#"<bsdf type="diffuse"><bsdf type="diffuse" name="reflectance"/></bsdf>"#),
+        "2:43: 'reflectance' must be a colour or a <texture>",
     );
 }
 
@@ -777,21 +790,19 @@ fn emitters() {
     // Errors.
     let e = error_of(&scene(r#"<emitter type="area"/>"#));
     assert_eq!(e, "2:1: an area emitter must be nested in a <shape>");
-    let e = error_of(&scene(r#"<emitter type="sunsky"/>"#));
-    assert!(e.starts_with("2:1: unsupported emitter 'sunsky'"), "{e}");
-    let e = error_of(&scene(
-        r#"<emitter type="spot"><float name="cutoff_angle" value="10"/><float name="beam_width" value="20"/></emitter>"#,
-    ));
-    assert!(
-        e.starts_with("2:61: 'beam_width' must be between 0 and 10"),
-        "{e}"
+    assert_error_starts_with(
+        &scene(r#"<emitter type="sunsky"/>"#),
+        "2:1: unsupported emitter 'sunsky'",
     );
-    let e = error_of(&scene(
-        r#"<shape type="sphere"><emitter type="point"/></shape>"#,
-    ));
-    assert!(
-        e.starts_with("2:22: only area emitters can be attached to shapes"),
-        "{e}"
+    assert_error_starts_with(
+        &scene(
+            r#"<emitter type="spot"><float name="cutoff_angle" value="10"/><float name="beam_width" value="20"/></emitter>"#,
+        ),
+        "2:61: 'beam_width' must be between 0 and 10",
+    );
+    assert_error_starts_with(
+        &scene(r#"<shape type="sphere"><emitter type="point"/></shape>"#),
+        "2:22: only area emitters can be attached to shapes",
     );
 }
 
@@ -846,10 +857,9 @@ fn malformed_documents() {
     assert_eq!(e, "3:1: malformed XML: expected 'shape' tag, not 'scene'");
     let e = error_of("<bsdf version=\"3.0.0\" type=\"diffuse\"/>");
     assert_eq!(e, "1:1: the root element must be <scene>, not <bsdf>");
-    let e = error_of("<scene>\n</scene>");
-    assert!(
-        e.starts_with("1:1: <scene> needs a 'version' attribute"),
-        "{e}"
+    assert_error_starts_with(
+        "<scene>\n</scene>",
+        "1:1: <scene> needs a 'version' attribute",
     );
     let e = error_of("<scene version=\"three\"/>");
     assert_eq!(e, "1:17: invalid version number 'three'");
@@ -865,8 +875,10 @@ fn malformed_documents() {
     assert_eq!(e, "2:54: the parameter 'radius' is given twice");
     let e = error_of(&scene(r#"<shape type="sphere"><frobnicate/></shape>"#));
     assert_eq!(e, "2:22: unknown element <frobnicate>");
-    let e = error_of(&scene(r#"<medium type="homogeneous"/>"#));
-    assert!(e.starts_with("2:1: participating media"), "{e}");
+    assert_error_starts_with(
+        &scene(r#"<medium type="homogeneous"/>"#),
+        "2:1: participating media",
+    );
     let e = error_of(&scene(
         r#"<shape type="sphere"><boolean name="flip_normals" value="yes"/></shape>"#,
     ));

@@ -22,7 +22,8 @@
 //! beyond `t_limit` of the best hit; shadow rays stop at the first hit.
 
 use super::{
-    clip, inflate, inv_dir, margin, t_limit, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor,
+    clip, inflate, inv_dir, margin, t_limit, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
+    ClosestVisitor,
 };
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray, Vec3};
@@ -61,7 +62,7 @@ impl Grid {
         if prims.is_empty() {
             return Self::default();
         }
-        let scene = prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(p.bounds));
+        let scene = union_bounds(prims);
         let m = margin(&scene);
         let bounds = inflate(scene, 2.0 * m);
         let boxes: Vec<Bounds3> = prims.iter().map(|p| inflate(p.bounds, m)).collect();
@@ -237,16 +238,12 @@ impl Grid {
 
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        let mut v = ClosestVisitor::new(geometry, ray);
-        let visited = self.traverse(ray, &mut v);
-        v.finish(visited, stats)
+        ClosestVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
     }
 
     /// True when any primitive is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        let mut v = AnyVisitor::new(geometry, ray);
-        let visited = self.traverse(ray, &mut v);
-        v.finish(visited, stats)
+        AnyVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
     }
 }
 
@@ -394,19 +391,7 @@ mod tests {
 
     #[test]
     fn two_triangles_in_different_cells() {
-        // Two unit triangles facing +z, far apart along x.
-        let g = triangles(&[
-            [
-                Point3::new(0.0, 0.0, 0.0),
-                Point3::new(1.0, 0.0, 0.0),
-                Point3::new(0.0, 1.0, 0.0),
-            ],
-            [
-                Point3::new(9.0, 0.0, 1.0),
-                Point3::new(10.0, 0.0, 1.0),
-                Point3::new(9.0, 1.0, 1.0),
-            ],
-        ]);
+        let g = test_scenes::two_triangles();
         let gr = grid(&g);
         assert!(gr.cell_count() > 1);
         let mut st = RayStats::default();

@@ -37,7 +37,10 @@
 //! a node entered beyond `t_limit` of the best hit is skipped (entries are only nearly ordered
 //! with thick planes, so the stack is still emptied); shadow rays stop at the first hit.
 
-use super::{clip, inflate, inv_dir, margin, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor};
+use super::{
+    clip, inflate, inv_dir, margin, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
+    ClosestVisitor,
+};
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray};
 use crate::scene::Geometry;
@@ -170,7 +173,7 @@ impl KdTree {
         if prims.is_empty() {
             return Self::default();
         }
-        let scene = prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(p.bounds));
+        let scene = union_bounds(prims);
         let m = margin(&scene);
         let boxes: Vec<Bounds3> = prims.iter().map(|p| p.bounds).collect();
         let ids: Vec<u32> = prims.iter().map(|p| p.id).collect();
@@ -326,16 +329,12 @@ impl KdTree {
 
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        let mut v = ClosestVisitor::new(geometry, ray);
-        let visited = self.traverse(ray, &mut v);
-        v.finish(visited, stats)
+        ClosestVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
     }
 
     /// True when any primitive is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        let mut v = AnyVisitor::new(geometry, ray);
-        let visited = self.traverse(ray, &mut v);
-        v.finish(visited, stats)
+        AnyVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
     }
 }
 
@@ -431,6 +430,34 @@ fn sah(bounds: &Bounds3, axis: usize, t: f32, nb: u32, na: u32) -> f32 {
         + ISECT_COST * (1.0 - eb) * (below * inv_area * nb as f32 + above * inv_area * na as f32)
 }
 
+/// The cheapest split seen so far.
+struct Cheapest {
+    cost: f32,
+    split: Option<Split>,
+}
+
+impl Cheapest {
+    fn new() -> Self {
+        Self {
+            cost: f32::INFINITY,
+            split: None,
+        }
+    }
+
+    /// Considers the plane at `t` on `axis` with `nb` primitives below and `na` above, when it
+    /// lies strictly inside `bounds`.
+    #[inline]
+    fn consider(&mut self, bounds: &Bounds3, axis: usize, t: f32, nb: u32, na: u32) {
+        if t > bounds.min[axis] && t < bounds.max[axis] {
+            let cost = sah(bounds, axis, t, nb, na);
+            if cost < self.cost {
+                self.cost = cost;
+                self.split = Some((cost, axis, t));
+            }
+        }
+    }
+}
+
 /// A sort key ordering edges by position, starts before ends at the same position.
 #[inline]
 fn edge_key(t: f32, end: bool) -> u64 {
@@ -455,7 +482,6 @@ fn swept(ctx: &Ctx, bounds: &Bounds3, list: &[u32], edges: &mut Vec<u64>) -> Opt
     let n = list.len() as u32;
     let mut axis = bounds.max_extent();
     for _ in 0..3 {
-        let (lo, hi) = (bounds.min[axis], bounds.max[axis]);
         edges.clear();
         for &p in list {
             let b = &ctx.boxes[p as usize];
@@ -463,8 +489,7 @@ fn swept(ctx: &Ctx, bounds: &Bounds3, list: &[u32], edges: &mut Vec<u64>) -> Opt
             edges.push(edge_key(b.max[axis], true));
         }
         edges.sort_unstable();
-        let mut best: Option<Split> = None;
-        let mut best_cost = f32::INFINITY;
+        let mut best = Cheapest::new();
         let (mut nb, mut na) = (0u32, n);
         for &e in edges.iter() {
             let end = e & 1 == 1;
@@ -472,19 +497,13 @@ fn swept(ctx: &Ctx, bounds: &Bounds3, list: &[u32], edges: &mut Vec<u64>) -> Opt
             if end {
                 na -= 1;
             }
-            if t > lo && t < hi {
-                let cost = sah(bounds, axis, t, nb, na);
-                if cost < best_cost {
-                    best_cost = cost;
-                    best = Some((cost, axis, t));
-                }
-            }
+            best.consider(bounds, axis, t, nb, na);
             if !end {
                 nb += 1;
             }
         }
-        if best.is_some() {
-            return best;
+        if best.split.is_some() {
+            return best.split;
         }
         axis = (axis + 1) % 3;
     }
@@ -495,8 +514,7 @@ fn swept(ctx: &Ctx, bounds: &Bounds3, list: &[u32], edges: &mut Vec<u64>) -> Opt
 /// counts of box starts and ends per interval.
 fn binned(ctx: &Ctx, bounds: &Bounds3, list: &[u32]) -> Option<Split> {
     let n = list.len() as u32;
-    let mut best: Option<Split> = None;
-    let mut best_cost = f32::INFINITY;
+    let mut best = Cheapest::new();
     for axis in 0..3 {
         let (lo, hi) = (bounds.min[axis], bounds.max[axis]);
         if !(hi > lo) {
@@ -516,16 +534,10 @@ fn binned(ctx: &Ctx, bounds: &Bounds3, list: &[u32]) -> Option<Split> {
             nb += starts[i - 1];
             na -= ends[i - 1];
             let t = lo + (hi - lo) * (i as f32 / BINS as f32);
-            if t > lo && t < hi {
-                let cost = sah(bounds, axis, t, nb, na);
-                if cost < best_cost {
-                    best_cost = cost;
-                    best = Some((cost, axis, t));
-                }
-            }
+            best.consider(bounds, axis, t, nb, na);
         }
     }
-    best
+    best.split
 }
 
 #[cfg(test)]
@@ -554,18 +566,7 @@ mod tests {
 
     #[test]
     fn two_triangles_are_split_apart() {
-        let g = triangles(&[
-            [
-                Point3::new(0.0, 0.0, 0.0),
-                Point3::new(1.0, 0.0, 0.0),
-                Point3::new(0.0, 1.0, 0.0),
-            ],
-            [
-                Point3::new(9.0, 0.0, 1.0),
-                Point3::new(10.0, 0.0, 1.0),
-                Point3::new(9.0, 1.0, 1.0),
-            ],
-        ]);
+        let g = test_scenes::two_triangles();
         let k = kdtree(&g);
         assert!(k.node_count() >= 3);
         assert_eq!(k.reference_count(), 2);
@@ -591,34 +592,7 @@ mod tests {
 
     #[test]
     fn a_primitive_spanning_many_leaves_is_found_at_the_nearer_one() {
-        let mut tris: Vec<[Point3; 3]> = (0..60)
-            .map(|i| {
-                let x = i as f32;
-                [
-                    Point3::new(x, 0.0, 0.0),
-                    Point3::new(x + 0.5, 0.0, 0.0),
-                    Point3::new(x, 0.5, 0.0),
-                ]
-            })
-            .collect();
-        tris.push([
-            Point3::new(-1.0, -1.0, 1.0),
-            Point3::new(65.0, -1.0, 1.0),
-            Point3::new(-1.0, 2.0, 1.0),
-        ]);
-        let g = triangles(&tris);
-        let k = kdtree(&g);
-        assert!(k.reference_count() > tris.len());
-        let mut st = RayStats::default();
-        let h = k
-            .intersect(
-                &g,
-                &Ray::new(Point3::new(0.2, 0.1, 3.0), Vec3::new(0.05, 0.0, -1.0)),
-                &mut st,
-            )
-            .unwrap();
-        assert_eq!(h.prim, 60);
-        agrees_with_list(&g, &k);
+        test_scenes::a_long_primitive_in_front_of_a_row(kdtree, 60, KdTree::reference_count);
     }
 
     #[test]

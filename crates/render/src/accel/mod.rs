@@ -132,6 +132,11 @@ pub fn build_prims(geometry: &Geometry) -> Vec<BuildPrim> {
     }
 }
 
+/// The union of the boxes of `prims`.
+pub(crate) fn union_bounds(prims: &[BuildPrim]) -> Bounds3 {
+    prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(p.bounds))
+}
+
 /// Relative slack of `t_limit`.
 const T_SLACK: f32 = 1.0 / 65536.0;
 
@@ -249,37 +254,70 @@ pub(crate) trait CellVisitor {
     fn limit(&self) -> f32;
 }
 
-/// Closest-hit queries: keeps the best hit, shortens the ray to one ULP past it (so ties at the
-/// same `t` are still tested and go to the smaller id), and asks for cells entered up to
-/// `t_limit` of it.
-pub(crate) struct ClosestVisitor<'a> {
+/// What both visitors share: the geometry, the sheared ray, the mailbox and the test count.
+struct Tester<'a> {
     geometry: &'a Geometry,
     sr: ShearedRay,
-    ray: Ray,
-    best: Option<Hit>,
     tests: u64,
     mailbox: Mailbox,
 }
 
-impl<'a> ClosestVisitor<'a> {
+impl<'a> Tester<'a> {
     #[inline(always)]
-    pub(crate) fn new(geometry: &'a Geometry, ray: &Ray) -> Self {
+    fn new(geometry: &'a Geometry, ray: &Ray) -> Self {
         Self {
             geometry,
             sr: ShearedRay::new(ray),
-            ray: *ray,
-            best: None,
             tests: 0,
             mailbox: Mailbox::new(),
         }
     }
 
-    /// The best hit, with the counters added to `stats`.
+    /// Intersects primitive `id` with `ray`, unless the mailbox says it was just tested.
     #[inline(always)]
-    pub(crate) fn finish(self, visited: u64, stats: &mut RayStats) -> Option<Hit> {
+    fn test(&mut self, id: u32, ray: &Ray) -> Option<Hit> {
+        if self.mailbox.seen(id) {
+            return None;
+        }
+        self.tests += 1;
+        self.geometry.intersect_prim(id, ray, &self.sr)
+    }
+
+    /// Adds the counters to `stats`.
+    #[inline(always)]
+    fn count(&self, visited: u64, stats: &mut RayStats) {
         stats.nodes += visited;
         stats.prim_tests += self.tests;
-        self.best
+    }
+}
+
+/// Closest-hit queries: keeps the best hit, shortens the ray to one ULP past it (so ties at the
+/// same `t` are still tested and go to the smaller id), and asks for cells entered up to
+/// `t_limit` of it.
+pub(crate) struct ClosestVisitor<'a> {
+    tester: Tester<'a>,
+    ray: Ray,
+    best: Option<Hit>,
+}
+
+impl<'a> ClosestVisitor<'a> {
+    /// The closest hit of `ray` found by `traverse` (which returns the number of nodes it
+    /// visited), with the counters added to `stats`.
+    #[inline(always)]
+    pub(crate) fn run(
+        geometry: &'a Geometry,
+        ray: &Ray,
+        stats: &mut RayStats,
+        traverse: impl FnOnce(&mut Self) -> u64,
+    ) -> Option<Hit> {
+        let mut v = Self {
+            tester: Tester::new(geometry, ray),
+            ray: *ray,
+            best: None,
+        };
+        let visited = traverse(&mut v);
+        v.tester.count(visited, stats);
+        v.best
     }
 }
 
@@ -287,11 +325,7 @@ impl CellVisitor for ClosestVisitor<'_> {
     #[inline(always)]
     fn cell(&mut self, prims: &[u32]) -> bool {
         for &id in prims {
-            if self.mailbox.seen(id) {
-                continue;
-            }
-            self.tests += 1;
-            if let Some(h) = self.geometry.intersect_prim(id, &self.ray, &self.sr) {
+            if let Some(h) = self.tester.test(id, &self.ray) {
                 if closest(&mut self.best, h) {
                     self.ray.tmax = h.t.next_up();
                 }
@@ -311,33 +345,29 @@ impl CellVisitor for ClosestVisitor<'_> {
 
 /// Any-hit queries: stops at the first hit.
 pub(crate) struct AnyVisitor<'a> {
-    geometry: &'a Geometry,
-    sr: ShearedRay,
+    tester: Tester<'a>,
     ray: &'a Ray,
     found: bool,
-    tests: u64,
-    mailbox: Mailbox,
 }
 
 impl<'a> AnyVisitor<'a> {
+    /// Whether `traverse` (which returns the number of nodes it visited) found anything along
+    /// `ray`, with the counters added to `stats`.
     #[inline(always)]
-    pub(crate) fn new(geometry: &'a Geometry, ray: &'a Ray) -> Self {
-        Self {
-            geometry,
-            sr: ShearedRay::new(ray),
+    pub(crate) fn run(
+        geometry: &'a Geometry,
+        ray: &'a Ray,
+        stats: &mut RayStats,
+        traverse: impl FnOnce(&mut Self) -> u64,
+    ) -> bool {
+        let mut v = Self {
+            tester: Tester::new(geometry, ray),
             ray,
             found: false,
-            tests: 0,
-            mailbox: Mailbox::new(),
-        }
-    }
-
-    /// Whether anything was hit, with the counters added to `stats`.
-    #[inline(always)]
-    pub(crate) fn finish(self, visited: u64, stats: &mut RayStats) -> bool {
-        stats.nodes += visited;
-        stats.prim_tests += self.tests;
-        self.found
+        };
+        let visited = traverse(&mut v);
+        v.tester.count(visited, stats);
+        v.found
     }
 }
 
@@ -345,15 +375,7 @@ impl CellVisitor for AnyVisitor<'_> {
     #[inline(always)]
     fn cell(&mut self, prims: &[u32]) -> bool {
         for &id in prims {
-            if self.mailbox.seen(id) {
-                continue;
-            }
-            self.tests += 1;
-            if self
-                .geometry
-                .intersect_prim(id, self.ray, &self.sr)
-                .is_some()
-            {
+            if self.tester.test(id, self.ray).is_some() {
                 self.found = true;
                 return false;
             }
@@ -405,7 +427,7 @@ impl Accel {
                 // Grown boxes: a primitive may report a hit that round-off puts a hair outside
                 // its exact box, which the list would still find.
                 let mut prims = build_prims(geometry);
-                let m = margin(&prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(p.bounds)));
+                let m = margin(&union_bounds(&prims));
                 for p in &mut prims {
                     p.bounds = inflate(p.bounds, m);
                 }
@@ -509,6 +531,66 @@ pub(crate) mod test_scenes {
             vec![mesh]
         };
         Geometry::new(Vec::new(), meshes)
+    }
+
+    /// Two unit triangles facing +z, far apart along x: id 0 at z = 0 from the origin, id 1 at
+    /// z = 1 from x = 9.
+    pub fn two_triangles() -> Geometry {
+        triangles(&[
+            [
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(0.0, 1.0, 0.0),
+            ],
+            [
+                Point3::new(9.0, 0.0, 1.0),
+                Point3::new(10.0, 0.0, 1.0),
+                Point3::new(9.0, 1.0, 1.0),
+            ],
+        ])
+    }
+
+    /// A row of `n` small triangles along x, facing +z.
+    pub fn row(n: usize) -> Vec<[Point3; 3]> {
+        (0..n)
+            .map(|i| {
+                let x = i as f32;
+                [
+                    Point3::new(x, 0.0, 0.0),
+                    Point3::new(x + 0.5, 0.0, 0.0),
+                    Point3::new(x, 0.5, 0.0),
+                ]
+            })
+            .collect()
+    }
+
+    /// A [`row`] of `n` with a long triangle (id `n`) in front of the whole row, so listed in
+    /// many cells (`references` of the structure exceed the triangles): a ray near the row's
+    /// start hits the long one; then the comparison with the list.
+    pub fn a_long_primitive_in_front_of_a_row<S: Structure>(
+        build: impl Fn(&Geometry) -> S,
+        n: usize,
+        references: impl Fn(&S) -> usize,
+    ) {
+        let mut tris = row(n);
+        tris.push([
+            Point3::new(-1.0, -1.0, 1.0),
+            Point3::new(n as f32 + 5.0, -1.0, 1.0),
+            Point3::new(-1.0, 2.0, 1.0),
+        ]);
+        let g = triangles(&tris);
+        let s = build(&g);
+        assert!(references(&s) > tris.len());
+        let mut st = RayStats::default();
+        let h = s
+            .hit(
+                &g,
+                &Ray::new(Point3::new(0.2, 0.1, 3.0), Vec3::new(0.05, 0.0, -1.0)),
+                &mut st,
+            )
+            .unwrap();
+        assert_eq!(h.prim as usize, n);
+        agrees_with_list(&g, &s);
     }
 
     /// Flat parallelograms (zero thickness on an axis, some on cell-like boundaries, one

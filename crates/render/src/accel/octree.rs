@@ -19,7 +19,8 @@
 //! `t_limit` of the best hit; shadow rays stop at the first hit.
 
 use super::{
-    clip, inflate, inv_dir, margin, t_limit, AnyVisitor, BuildPrim, CellVisitor, ClosestVisitor,
+    clip, inflate, inv_dir, margin, t_limit, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
+    ClosestVisitor,
 };
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Point3, Ray};
@@ -177,7 +178,7 @@ impl Octree {
         if prims.is_empty() {
             return Self::default();
         }
-        let scene = prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(p.bounds));
+        let scene = union_bounds(prims);
         let m = margin(&scene);
         let boxes: Vec<Bounds3> = prims.iter().map(|p| inflate(p.bounds, m)).collect();
         let ids: Vec<u32> = prims.iter().map(|p| p.id).collect();
@@ -325,41 +326,23 @@ impl Octree {
 
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        let mut v = ClosestVisitor::new(geometry, ray);
-        let visited = self.traverse(ray, &mut v);
-        v.finish(visited, stats)
+        ClosestVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
     }
 
     /// True when any primitive is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        let mut v = AnyVisitor::new(geometry, ray);
-        let visited = self.traverse(ray, &mut v);
-        v.finish(visited, stats)
+        AnyVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_scenes::{self, agrees_with_list, triangles};
+    use super::super::test_scenes::{self, agrees_with_list, row, triangles};
     use super::*;
     use crate::math::Vec3;
 
     fn octree(g: &Geometry) -> Octree {
         Octree::build(&super::super::build_prims(g))
-    }
-
-    /// A row of `n` small triangles along x, facing +z.
-    fn row(n: usize) -> Vec<[Point3; 3]> {
-        (0..n)
-            .map(|i| {
-                let x = i as f32;
-                [
-                    Point3::new(x, 0.0, 0.0),
-                    Point3::new(x + 0.5, 0.0, 0.0),
-                    Point3::new(x, 0.5, 0.0),
-                ]
-            })
-            .collect()
     }
 
     #[test]
@@ -386,26 +369,7 @@ mod tests {
 
     #[test]
     fn a_primitive_spanning_many_octants_is_found_at_the_nearer_one() {
-        let mut tris = row(40);
-        // A long triangle in front of the whole row.
-        tris.push([
-            Point3::new(-1.0, -1.0, 1.0),
-            Point3::new(45.0, -1.0, 1.0),
-            Point3::new(-1.0, 2.0, 1.0),
-        ]);
-        let g = triangles(&tris);
-        let o = octree(&g);
-        assert!(o.reference_count() > tris.len());
-        let mut st = RayStats::default();
-        let h = o
-            .intersect(
-                &g,
-                &Ray::new(Point3::new(0.2, 0.1, 3.0), Vec3::new(0.05, 0.0, -1.0)),
-                &mut st,
-            )
-            .unwrap();
-        assert_eq!(h.prim, 40);
-        agrees_with_list(&g, &o);
+        test_scenes::a_long_primitive_in_front_of_a_row(octree, 40, Octree::reference_count);
     }
 
     #[test]

@@ -9,6 +9,7 @@ use candela_render::image::Image;
 use candela_render::integrator::Integrator;
 use candela_render::material::{Material, Model};
 use candela_render::math::{Matrix4, Point3, Ray, Transform, Vec3};
+use candela_render::radiosity::PatchInfo;
 use candela_render::render::{render, RenderSettings};
 use candela_render::scene::Emission;
 use candela_render::shape::{Cube, Parallelogram, Shape};
@@ -19,14 +20,8 @@ use candela_render::{Rgb, Scene, SceneBuilder};
 /// The light's radiance in ../shared/bench/cornell.xml.
 pub const CORNELL_LIGHT: Rgb = Rgb::new(18.387, 13.9873, 6.75357);
 
-fn matrix(v: [f32; 16]) -> Transform {
-    let m = Matrix4::new([
-        [v[0], v[1], v[2], v[3]],
-        [v[4], v[5], v[6], v[7]],
-        [v[8], v[9], v[10], v[11]],
-        [v[12], v[13], v[14], v[15]],
-    ]);
-    Transform::from_matrix(m).expect("invertible")
+fn matrix(rows: [[f32; 4]; 4]) -> Transform {
+    Transform::from_matrix(Matrix4::new(rows)).expect("invertible")
 }
 
 /// Mitsuba's `rectangle` ([-1,1]² of z = 0) placed by `t`, with the normal t·(+z).
@@ -63,164 +58,83 @@ pub fn cornell(accel: AccelKind) -> Scene {
         radiance: Texture::Uniform(CORNELL_LIGHT),
         two_sided: false,
     });
-    let rect = |m: [f32; 16]| Shape::Parallelogram(rectangle(&matrix(m)));
+    let rect = |m: [[f32; 4]; 4]| Shape::Parallelogram(rectangle(&matrix(m)));
     b.add_shape(
         rect([
-            0.23,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            -8.30516367e-09,
-            -0.19,
-            0.99,
-            0.0,
-            0.19,
-            -8.30516367e-09,
-            0.01,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
+            [0.23, 0.0, 0.0, 0.0],
+            [0.0, -8.30516367e-09, -0.19, 0.99],
+            [0.0, 0.19, -8.30516367e-09, 0.01],
+            [0.0, 0.0, 0.0, 1.0],
         ]),
         white,
         Some(light),
     );
     b.add_shape(
         rect([
-            0.99999994,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            -4.37113883e-08,
-            1.0,
-            -1.0,
-            0.0,
-            -1.0,
-            -4.37113883e-08,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
+            [0.99999994, 0.0, 0.0, 0.0],
+            [0.0, -4.37113883e-08, 1.0, -1.0],
+            [0.0, -1.0, -4.37113883e-08, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
         ]),
         white,
         None,
     );
     b.add_shape(
         rect([
-            0.99999994,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            -4.37113883e-08,
-            -1.0,
-            1.0,
-            0.0,
-            1.0,
-            -4.37113883e-08,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
+            [0.99999994, 0.0, 0.0, 0.0],
+            [0.0, -4.37113883e-08, -1.0, 1.0],
+            [0.0, 1.0, -4.37113883e-08, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
         ]),
         white,
         None,
     );
     b.add_shape(
         rect([
-            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 1.0,
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, -1.0],
+            [0.0, 0.0, 0.0, 1.0],
         ]),
         white,
         None,
     );
     b.add_shape(
         rect([
-            -4.37113883e-08,
-            0.0,
-            -1.0,
-            1.0,
-            0.0,
-            0.99999994,
-            0.0,
-            0.0,
-            1.0,
-            0.0,
-            -4.37113883e-08,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
+            [-4.37113883e-08, 0.0, -1.0, 1.0],
+            [0.0, 0.99999994, 0.0, 0.0],
+            [1.0, 0.0, -4.37113883e-08, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
         ]),
         green,
         None,
     );
     b.add_shape(
         rect([
-            -4.37113883e-08,
-            0.0,
-            1.0,
-            -1.0,
-            0.0,
-            0.99999994,
-            0.0,
-            0.0,
-            -1.0,
-            0.0,
-            -4.37113883e-08,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
+            [-4.37113883e-08, 0.0, 1.0, -1.0],
+            [0.0, 0.99999994, 0.0, 0.0],
+            [-1.0, 0.0, -4.37113883e-08, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
         ]),
         red,
         None,
     );
     b.add_shape(
         Shape::Cube(Cube::new(matrix([
-            0.28689146,
-            0.0,
-            -0.087711513,
-            0.335,
-            0.0,
-            0.3,
-            0.0,
-            -0.7,
-            0.087711513,
-            0.0,
-            0.28689146,
-            0.38,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
+            [0.28689146, 0.0, -0.087711513, 0.335],
+            [0.0, 0.3, 0.0, -0.7],
+            [0.087711513, 0.0, 0.28689146, 0.38],
+            [0.0, 0.0, 0.0, 1.0],
         ]))),
         white,
         None,
     );
     b.add_shape(
         Shape::Cube(Cube::new(matrix([
-            0.284909755,
-            0.0,
-            0.0939491391,
-            -0.33,
-            0.0,
-            0.61,
-            0.0,
-            -0.4,
-            -0.0939491391,
-            0.0,
-            0.284909755,
-            -0.28,
-            0.0,
-            0.0,
-            0.0,
-            1.0,
+            [0.284909755, 0.0, 0.0939491391, -0.33],
+            [0.0, 0.61, 0.0, -0.4],
+            [-0.0939491391, 0.0, 0.284909755, -0.28],
+            [0.0, 0.0, 0.0, 1.0],
         ]))),
         white,
         None,
@@ -242,6 +156,82 @@ pub fn cornell(accel: AccelKind) -> Scene {
     b.build(accel)
 }
 
+/// The parallelogram with corner `p` and edges `v` and `w`.
+pub fn para(p: [f32; 3], v: [f32; 3], w: [f32; 3]) -> Shape {
+    Shape::Parallelogram(
+        Parallelogram::new(
+            Point3::new(p[0], p[1], p[2]),
+            Vec3::new(v[0], v[1], v[2]),
+            Vec3::new(w[0], w[1], w[2]),
+        )
+        .unwrap(),
+    )
+}
+
+/// A closed box of six two-sided parallelograms [-1, 1]³ reflecting `rho`; with `radiance`,
+/// every wall emits it from both sides. The camera looks along +x from inside, its origin at
+/// `camera` (the eye is d = 1 behind it).
+pub fn closed_box_with(rho: f32, radiance: Option<Rgb>, camera: Vec3) -> Scene {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(rho))));
+    let e = radiance.map(|radiance| {
+        b.add_emission(Emission {
+            radiance: Texture::Uniform(radiance),
+            two_sided: true,
+        })
+    });
+    let walls = [
+        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
+        ([-1.0, -1.0, 1.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
+        ([-1.0, -1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
+        ([-1.0, 1.0, -1.0], [2.0, 0.0, 0.0], [0.0, 0.0, 2.0]),
+        ([-1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
+        ([1.0, -1.0, -1.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]),
+    ];
+    for (p, v, w) in walls {
+        b.add_shape(para(p, v, w), m, e);
+    }
+    b.camera(Camera::perspective(
+        1.0,
+        1.0,
+        Transform::translation(camera),
+    ));
+    b.build(AccelKind::Bvh)
+}
+
+/// The Cornell box (BVH) with its tall box (object 7) turned into a two-sided mirror of
+/// reflectance 0.9.
+pub fn cornell_with_mirror() -> Scene {
+    let base = cornell(AccelKind::Bvh);
+    let mut b = SceneBuilder::new();
+    for mat in &base.materials {
+        b.add_material(mat.clone());
+    }
+    let mirror = b.add_material(Material::two_sided(Model::Specular {
+        reflectance: Texture::Uniform(Rgb::splat(0.9)),
+    }));
+    let e = b.add_emission(base.emissions[0].clone());
+    for (i, o) in base.geometry.objects().iter().enumerate() {
+        let mat = if i == 7 { mirror } else { o.props.material };
+        b.add_shape(o.shape.clone(), mat, o.props.emission.map(|_| e));
+    }
+    b.camera(base.camera);
+    b.build(AccelKind::Bvh)
+}
+
+/// Whether a patch faces the origin (the inside of a box around it).
+pub fn inward(p: &PatchInfo) -> bool {
+    p.normal.dot(Point3::ORIGIN - p.centre) > 0.0
+}
+
+/// The camera ray through the centre of pixel (`x`, `y`) of a `res × res` image.
+pub fn pixel_ray(scene: &Scene, res: usize, x: usize, y: usize) -> Ray {
+    scene.camera.ray(
+        (x as f32 + 0.5) / res as f32,
+        1.0 - (y as f32 + 0.5) / res as f32,
+    )
+}
+
 /// Renders `scene` at `res × res` with `spp` samples per pixel.
 pub fn image(scene: &Scene, integrator: &dyn Integrator, res: usize, spp: u32) -> Image {
     let settings = RenderSettings {
@@ -259,11 +249,7 @@ pub fn emitter_mask(scene: &Scene, res: usize) -> Vec<bool> {
     let mut mask = Vec::with_capacity(res * res);
     for y in 0..res {
         for x in 0..res {
-            let (u, v) = (
-                (x as f32 + 0.5) / res as f32,
-                1.0 - (y as f32 + 0.5) / res as f32,
-            );
-            let ray: Ray = scene.camera.ray(u, v);
+            let ray = pixel_ray(scene, res, x, y);
             mask.push(
                 scene
                     .interact(&ray, &mut st)

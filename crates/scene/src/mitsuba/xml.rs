@@ -311,24 +311,26 @@ impl FromValue for f32 {
     }
 }
 
-impl FromValue for i64 {
-    const WHAT: &'static str = "an integer";
-    fn from_value(v: &Value) -> Option<Self> {
-        match *v {
-            Value::Int(i) => Some(i),
-            _ => None,
+/// `FromValue` for types held by exactly one variant of [`Value`].
+macro_rules! from_variant {
+    ($($t:ty: $what:literal, $variant:ident;)*) => {$(
+        impl FromValue for $t {
+            const WHAT: &'static str = $what;
+            fn from_value(v: &Value) -> Option<Self> {
+                match *v {
+                    Value::$variant(x) => Some(x),
+                    _ => None,
+                }
+            }
         }
-    }
+    )*};
 }
 
-impl FromValue for bool {
-    const WHAT: &'static str = "a boolean";
-    fn from_value(v: &Value) -> Option<Self> {
-        match *v {
-            Value::Bool(b) => Some(b),
-            _ => None,
-        }
-    }
+from_variant! {
+    i64: "an integer", Int;
+    bool: "a boolean", Bool;
+    [f64; 3]: "a point or vector", Vector;
+    M4: "a transform", Transform;
 }
 
 impl FromValue for String {
@@ -336,26 +338,6 @@ impl FromValue for String {
     fn from_value(v: &Value) -> Option<Self> {
         match v {
             Value::Str(s) => Some(s.to_string()),
-            _ => None,
-        }
-    }
-}
-
-impl FromValue for [f64; 3] {
-    const WHAT: &'static str = "a point or vector";
-    fn from_value(v: &Value) -> Option<Self> {
-        match *v {
-            Value::Vector(p) => Some(p),
-            _ => None,
-        }
-    }
-}
-
-impl FromValue for M4 {
-    const WHAT: &'static str = "a transform";
-    fn from_value(v: &Value) -> Option<Self> {
-        match v {
-            Value::Transform(m) => Some(*m),
             _ => None,
         }
     }
@@ -596,23 +578,23 @@ impl<'t> Props<'t> {
         default: f64,
         range: (f64, f64),
     ) -> Result<f64, SceneError> {
-        let v = self.or(name, default)?;
-        if !(v >= range.0 && v <= range.1) {
-            return Err(self.error(
-                self.pos(name),
-                format!(
-                    "'{name}' must be between {} and {}, not {v}",
-                    range.0, range.1
-                ),
-            ));
-        }
-        Ok(v)
+        self.in_range(name, default, range)
     }
 
     /// An integer that must lie in `range` (inclusive), or `default`.
     pub fn int_in(&self, name: &str, default: i64, range: (i64, i64)) -> Result<i64, SceneError> {
+        self.in_range(name, default, range)
+    }
+
+    /// A value that must lie in `range` (inclusive; NaN does not), or `default`.
+    fn in_range<T: FromValue + PartialOrd + std::fmt::Display>(
+        &self,
+        name: &str,
+        default: T,
+        range: (T, T),
+    ) -> Result<T, SceneError> {
         let v = self.or(name, default)?;
-        if !(range.0..=range.1).contains(&v) {
+        if !(v >= range.0 && v <= range.1) {
             return Err(self.error(
                 self.pos(name),
                 format!(
