@@ -69,6 +69,10 @@ pub struct SurfaceInteraction {
     pub prim: u32,
     /// Material, emission and light of the surface.
     pub props: SurfaceProps,
+    /// The shading frame when the shape has it ready (flat shapes keep one per face); `None`:
+    /// computed from `ns` and `dpdu` on demand. Equal to what [`Frame::from_normal_tangent`]
+    /// gives for them.
+    pub frame: Option<Frame>,
 }
 
 impl SurfaceInteraction {
@@ -95,8 +99,12 @@ impl SurfaceInteraction {
     }
 
     /// The shading frame around the shading normal as the shape orients it.
+    #[inline]
     pub fn shading_frame(&self) -> Frame {
-        Frame::from_normal_tangent(self.ns, self.dpdu)
+        match self.frame {
+            Some(f) => f,
+            None => Frame::from_normal_tangent(self.ns, self.dpdu),
+        }
     }
 
     /// A ray leaving this point in direction `d`, offset against self-intersection.

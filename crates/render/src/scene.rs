@@ -157,6 +157,7 @@ impl Geometry {
     }
 
     /// The full interaction for a hit found along `ray`.
+    #[inline]
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
         let sh = ShapeHit {
             t: hit.t,
@@ -164,17 +165,29 @@ impl Geometry {
             sub: hit.sub,
             leaf: hit.leaf,
         };
-        let (g, props) = match self.prims[hit.prim as usize] {
+        let (g, props, frame) = match self.prims[hit.prim as usize] {
             PrimRef::Object(o) => {
                 let obj = &self.objects[o as usize];
-                (
-                    obj.shape.geometry(ray, &sh),
-                    obj.shape.hit_props(&sh).unwrap_or(obj.props),
-                )
+                match &obj.shape {
+                    // Flat shapes with their frames ready.
+                    Shape::Parallelogram(p) => {
+                        (p.geometry(sh.uv[0], sh.uv[1]), obj.props, Some(p.frame()))
+                    }
+                    Shape::Cube(c) => (
+                        c.geometry(ray, sh.t, sh.sub),
+                        obj.props,
+                        Some(c.face_frame(sh.sub)),
+                    ),
+                    shape => (
+                        shape.geometry(ray, &sh),
+                        shape.hit_props(&sh).unwrap_or(obj.props),
+                        None,
+                    ),
+                }
             }
             PrimRef::Triangle { mesh, tri } => {
                 let m = &self.meshes[mesh as usize];
-                (m.geometry(tri, hit.uv[0], hit.uv[1]), m.props)
+                (m.geometry(tri, hit.uv[0], hit.uv[1]), m.props, None)
             }
         };
         SurfaceInteraction {
@@ -187,6 +200,7 @@ impl Geometry {
             t: hit.t,
             prim: hit.prim,
             props,
+            frame,
         }
     }
 }

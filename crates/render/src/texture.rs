@@ -113,8 +113,18 @@ pub enum Texture {
 
 impl Texture {
     /// The colour at (u, v).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, uv: Point2) -> Rgb {
+        // Uniform colours, the common case, without a call.
+        match self {
+            Texture::Uniform(c) => *c,
+            _ => self.eval_varying(uv),
+        }
+    }
+
+    /// [`Texture::eval`] for the textures that vary over the surface.
+    #[inline(never)]
+    fn eval_varying(&self, uv: Point2) -> Rgb {
         match self {
             Texture::Uniform(c) => *c,
             Texture::Checkered { c1, c2, steps } => {

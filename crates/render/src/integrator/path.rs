@@ -63,10 +63,10 @@ impl Integrator for Path {
         let mut eta_scale = 1.0f32;
         let mut depth = 0u32;
         loop {
-            let d = ray.d.normalize();
             let Some(si) = scene.interact(&ray, stats) else {
                 // Lights at infinity, weighted against their own sampling.
                 if depth > 0 || !self.hide_emitters {
+                    let d = ray.d.normalize();
                     l += beta * scene.background;
                     for &i in &scene.infinite_lights {
                         let light = &scene.lights[i as usize];
@@ -105,7 +105,8 @@ impl Integrator for Path {
             }
 
             let bsdf = scene.material(&si).bsdf(si.shading_frame(), si.uv);
-            let wo = si.wo;
+            // The outgoing direction in the shading frame, shared by every BSDF query below.
+            let (wo, flip) = bsdf.local_wo(si.wo);
 
             // Next-event estimation: one light, chosen uniformly.
             if !bsdf.is_delta() && light_pick > 0.0 {
@@ -114,14 +115,15 @@ impl Integrator for Path {
                 let u = sampler.next_2d();
                 let light = &scene.lights[pick as usize];
                 if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u) {
-                    let f = bsdf.eval(wo, ls.wi);
+                    let wi = bsdf.local_wi(ls.wi, flip);
+                    let f = bsdf.eval_local(wo, wi);
                     if !f.is_black() && !super::local::shadowed(scene, &si, ls.wi, ls.target, stats)
                     {
                         let pdf_light = light_pick * ls.pdf;
                         let w = if ls.delta {
                             1.0
                         } else {
-                            power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf(wo, ls.wi))
+                            power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
                         };
                         l += beta * f * ls.li * (w / pdf_light);
                     }
@@ -135,7 +137,7 @@ impl Integrator for Path {
             // BSDF sampling continues the path.
             let u1 = sampler.next_1d();
             let u2 = sampler.next_2d();
-            let Some(bs) = bsdf.sample(wo, u1, u2) else {
+            let Some(bs) = bsdf.sample_local(wo, flip, u1, u2) else {
                 break;
             };
             beta *= bs.weight;

@@ -52,6 +52,8 @@ pub struct AreaLight {
     pub emission: u32,
     /// Total area.
     pub area: f32,
+    /// 1 / `area`: the density of uniform area sampling.
+    inv_area: f32,
 }
 
 impl AreaLight {
@@ -74,6 +76,7 @@ impl AreaLight {
             shape: AreaShape::Sphere { sphere, cone },
             emission,
             area,
+            inv_area: 1.0 / area,
         }
     }
 
@@ -84,6 +87,7 @@ impl AreaLight {
             shape: AreaShape::Parallelogram(p),
             emission,
             area,
+            inv_area: 1.0 / area,
         }
     }
 
@@ -95,6 +99,7 @@ impl AreaLight {
             shape: AreaShape::Disk(d),
             emission,
             area,
+            inv_area: 1.0 / area,
         }
     }
 
@@ -109,6 +114,7 @@ impl AreaLight {
             },
             emission,
             area,
+            inv_area: 1.0 / area,
         }
     }
 
@@ -123,6 +129,7 @@ impl AreaLight {
             },
             emission,
             area,
+            inv_area: 1.0 / area,
         }
     }
 
@@ -152,7 +159,7 @@ impl AreaLight {
                 geometry.meshes()[*mesh as usize].geometry(tri as u32, b1, b2)
             }
         };
-        Some((g, 1.0 / self.area))
+        Some((g, self.inv_area))
     }
 
     /// The area density of uniform-sphere sampling mapped through an arbitrary placement: the
@@ -250,7 +257,7 @@ impl AreaLight {
                 let ql = sphere.world_from_object.inv_point(q).to_vec();
                 self.sphere_area_pdf(sphere, ql / ql.norm())
             }
-            _ => 1.0 / self.area,
+            _ => self.inv_area,
         };
         let to = q - p;
         let d2 = to.squared_norm();

@@ -250,18 +250,43 @@ impl Bsdf<'_> {
     /// Local directions, mirrored to the front when two-sided and seen from the back.
     #[inline]
     fn local(&self, wo: Vec3, wi: Vec3) -> (Vec3, Vec3, bool) {
-        let (mut o, mut i) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        let (o, flip) = self.local_wo(wo);
+        (o, self.local_wi(wi, flip), flip)
+    }
+
+    /// The outgoing direction `wo` (world, unit) in the local frame, mirrored to the front when
+    /// the BSDF is two-sided and seen from the back, and whether it was mirrored: computed once
+    /// per vertex for [`Bsdf::local_wi`], [`Bsdf::eval_local`], [`Bsdf::pdf_local`] and
+    /// [`Bsdf::sample_local`].
+    #[inline]
+    pub fn local_wo(&self, wo: Vec3) -> (Vec3, bool) {
+        let mut o = self.frame.to_local(wo);
         let flip = self.two_sided && o.z < 0.0;
         if flip {
             o.z = -o.z;
+        }
+        (o, flip)
+    }
+
+    /// The incident direction `wi` (world, unit) in the local frame, mirrored like `wo`.
+    #[inline]
+    pub fn local_wi(&self, wi: Vec3, flip: bool) -> Vec3 {
+        let mut i = self.frame.to_local(wi);
+        if flip {
             i.z = -i.z;
         }
-        (o, i, flip)
+        i
     }
 
     /// f(wo, wi)·|cos θi| (world directions, unit).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         let (o, i, _) = self.local(wo, wi);
+        self.eval_local(o, i)
+    }
+
+    /// [`Bsdf::eval`] for directions from [`Bsdf::local_wo`] and [`Bsdf::local_wi`].
+    #[inline]
+    pub fn eval_local(&self, o: Vec3, i: Vec3) -> Rgb {
         match &self.model {
             BsdfModel::Lambert(r) => lambert::eval(*r, o, i),
             BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => Rgb::BLACK,
@@ -279,6 +304,12 @@ impl Bsdf<'_> {
     /// The density with which [`Bsdf::sample`] returns `wi` (0 for delta components).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (o, i, _) = self.local(wo, wi);
+        self.pdf_local(o, i)
+    }
+
+    /// [`Bsdf::pdf`] for directions from [`Bsdf::local_wo`] and [`Bsdf::local_wi`].
+    #[inline]
+    pub fn pdf_local(&self, o: Vec3, i: Vec3) -> f32 {
         match &self.model {
             BsdfModel::Lambert(_) => lambert::pdf(o, i),
             BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => 0.0,
@@ -294,11 +325,13 @@ impl Bsdf<'_> {
     /// Samples an incident direction for the outgoing direction `wo`, from the uniform numbers
     /// `u1` (lobe choice) and `u2`.
     pub fn sample(&self, wo: Vec3, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
-        let mut o = self.frame.to_local(wo);
-        let flip = self.two_sided && o.z < 0.0;
-        if flip {
-            o.z = -o.z;
-        }
+        let (o, flip) = self.local_wo(wo);
+        self.sample_local(o, flip, u1, u2)
+    }
+
+    /// [`Bsdf::sample`] for `wo` from [`Bsdf::local_wo`] (`o` and `flip`).
+    #[inline]
+    pub fn sample_local(&self, o: Vec3, flip: bool, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
         let s = match &self.model {
             BsdfModel::Lambert(r) => lambert::sample(*r, o, u2),
             BsdfModel::Mirror { r, eta_k } => specular::sample(*r, *eta_k, o),

@@ -25,6 +25,36 @@ pub struct Sampler {
     rindex: u32,
     /// The next dimension of the sample.
     dim: u32,
+    /// The scrambling seeds of the first [`CACHED_DIMS`] dimensions (see [`DimSeeds`]), which
+    /// depend only on the pixel and the dimension: computed by the first sample that reaches a
+    /// dimension and reused by the pixel's other samples.
+    seeds: [DimSeeds; CACHED_DIMS],
+    /// Bit `d` set when `seeds[d]` holds the seeds of dimension `d`.
+    cached: u64,
+}
+
+/// Dimensions whose seeds a pixel sampler keeps.
+const CACHED_DIMS: usize = 64;
+
+/// The seeds of one dimension of a pixel: the shuffle seed and the scramble seeds of the two
+/// coordinates of a pair.
+#[derive(Clone, Copy, Debug, Default)]
+struct DimSeeds {
+    shuffle: u32,
+    x: u32,
+    y: u32,
+}
+
+impl DimSeeds {
+    #[inline(always)]
+    fn new(seed: u32, dim: u32) -> Self {
+        let s = hash_u32(seed, dim);
+        Self {
+            shuffle: s,
+            x: mix32(s ^ 0x5bd1_e995),
+            y: mix32(s ^ 0x27d4_eb2f),
+        }
+    }
 }
 
 impl Sampler {
@@ -39,6 +69,8 @@ impl Sampler {
             index: 0,
             rindex: 0,
             dim: 0,
+            seeds: [DimSeeds::default(); CACHED_DIMS],
+            cached: 0,
         }
     }
 
@@ -52,6 +84,8 @@ impl Sampler {
             index: 0,
             rindex: 0,
             dim: 0,
+            seeds: [DimSeeds::default(); CACHED_DIMS],
+            cached: 0,
         }
     }
 
@@ -74,17 +108,33 @@ impl Sampler {
         self.next_2d()
     }
 
+    /// The seeds of dimension `dim` of a Sobol sampler with pixel seed `seed`.
+    #[inline(always)]
+    fn dim_seeds(&mut self, seed: u32, dim: u32) -> DimSeeds {
+        if (dim as usize) < CACHED_DIMS {
+            if self.cached & (1 << dim) != 0 {
+                return self.seeds[dim as usize];
+            }
+            let d = DimSeeds::new(seed, dim);
+            self.seeds[dim as usize] = d;
+            self.cached |= 1 << dim;
+            d
+        } else {
+            DimSeeds::new(seed, dim)
+        }
+    }
+
     /// The next uniform number.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         match self.sobol {
             Some(seed) => {
-                let s = hash_u32(seed, self.dim);
+                let s = self.dim_seeds(seed, self.dim);
                 self.dim += 1;
                 // With R the bit reversal and i = R(LK(R(index))) the shuffled index, the van
                 // der Corput point R(i) scrambled is R(LK(i)).
-                let r = laine_karras(self.rindex, s);
-                to_unit(laine_karras(r.reverse_bits(), mix32(s ^ 0x5bd1_e995)).reverse_bits())
+                let r = laine_karras(self.rindex, s.shuffle);
+                to_unit(laine_karras(r.reverse_bits(), s.x).reverse_bits())
             }
             None => self.rng.next_f32(),
         }
@@ -95,14 +145,14 @@ impl Sampler {
     pub fn next_2d(&mut self) -> [f32; 2] {
         match self.sobol {
             Some(seed) => {
-                let s = hash_u32(seed, self.dim);
+                let s = self.dim_seeds(seed, self.dim);
                 self.dim += 2;
                 // The shuffled index is i = R(r) with r = LK(R(index)) (R: bit reversal). The
                 // scrambled points are R(LK(R(vdc(i)))) = R(LK(i)) and R(LK(R(sobol1(i)))) =
                 // R(LK(G(r))) with G = R∘sobol1∘R, so only three reversals remain.
-                let r = laine_karras(self.rindex, s);
-                let x = laine_karras(r.reverse_bits(), mix32(s ^ 0x5bd1_e995)).reverse_bits();
-                let y = laine_karras(sobol_dim1_reversed(r), mix32(s ^ 0x27d4_eb2f)).reverse_bits();
+                let r = laine_karras(self.rindex, s.shuffle);
+                let x = laine_karras(r.reverse_bits(), s.x).reverse_bits();
+                let y = laine_karras(sobol_dim1_reversed(r), s.y).reverse_bits();
                 [to_unit(x), to_unit(y)]
             }
             None => {

@@ -5,13 +5,42 @@
 //! coordinates mapped from [-1, 1] to [0, 1] (x-faces: (y, z); y-faces: (x, z); z-faces: (x, y)).
 
 use super::{LocalGeometry, ShapeHit};
-use crate::math::{Bounds3, Normal3, Point2, Point3, Ray, Transform, Vec3};
+use crate::math::{Bounds3, Frame, Matrix4, Normal3, Point2, Point3, Ray, Transform, Vec3};
 
 /// The cube [-1,1]³ placed by `world_from_object`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Cube {
     /// Object → world.
     pub world_from_object: Transform,
+    /// The matrix and its inverse both have the last row (0, 0, 0, 1): points then move
+    /// between the frames without the homogeneous division, with the same results.
+    affine: bool,
+    /// What the surface of a hit needs, computed once by [`Cube::new`] (kept apart so that
+    /// the shape stays small).
+    faces: Box<Faces>,
+}
+
+/// The per-face quantities of a placed cube.
+#[derive(Clone, Debug, PartialEq)]
+struct Faces {
+    /// Unit world normal of each face (`2·axis + side`).
+    normals: [Normal3; 6],
+    /// ∂p/∂u of the faces of each axis.
+    dpdu: [Vec3; 3],
+    /// The shading frame of each face: [`Frame::from_normal_tangent`] of its normal and ∂p/∂u.
+    frames: [Frame; 6],
+}
+
+/// Applies the top three rows of a matrix to a point: the same operations as
+/// [`Transform::point`] when the last row is (0, 0, 0, 1) (for finite points, w is exactly 1).
+#[inline(always)]
+fn affine_point(m: &Matrix4, p: Point3) -> Point3 {
+    let m = &m.m;
+    Point3::new(
+        m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
+        m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
+        m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3],
+    )
 }
 
 /// A crossing of a ray with a convex solid: the parameter and the face crossed.
@@ -20,14 +49,44 @@ pub type Crossing = (f32, u32);
 impl Cube {
     /// A cube placed by `t`.
     pub fn new(world_from_object: Transform) -> Self {
-        Self { world_from_object }
+        let w = &world_from_object;
+        let normals = std::array::from_fn(|face| {
+            let sign = if face % 2 == 1 { 1.0 } else { -1.0 };
+            let mut n = [0.0; 3];
+            n[face / 2] = sign;
+            w.normal(Normal3::new(n[0], n[1], n[2])).normalize()
+        });
+        let dpdu = [Vec3::Y, Vec3::X, Vec3::X].map(|t| w.vector(t * 2.0));
+        let frames =
+            std::array::from_fn(|face| Frame::from_normal_tangent(normals[face], dpdu[face / 2]));
+        let last = [0.0, 0.0, 0.0, 1.0];
+        let affine = w.m.m[3] == last && w.inv.m[3] == last;
+        Self {
+            world_from_object,
+            affine,
+            faces: Box::new(Faces {
+                normals,
+                dpdu,
+                frames,
+            }),
+        }
+    }
+
+    /// The ray's origin in the cube's frame.
+    #[inline(always)]
+    fn local_origin(&self, o: Point3) -> Point3 {
+        if self.affine {
+            affine_point(&self.world_from_object.inv, o)
+        } else {
+            self.world_from_object.inv_point(o)
+        }
     }
 
     /// Where the ray's line enters and leaves the cube (parameters and faces), or `None`.
     /// Face ids are `2·axis + (1 if the + side)`.
     #[inline]
     pub fn crossings(&self, ray: &Ray) -> Option<(Crossing, Crossing)> {
-        let o = self.world_from_object.inv_point(ray.o);
+        let o = self.local_origin(ray.o);
         let d = self.world_from_object.inv_vector(ray.d);
         let mut near = (f32::NEG_INFINITY, 0u32);
         let mut far = (f32::INFINITY, 0u32);
@@ -72,47 +131,48 @@ impl Cube {
 
     /// The surface where the ray crosses `face` at `t`.
     pub fn geometry(&self, ray: &Ray, t: f32, face: u32) -> LocalGeometry {
-        let w = &self.world_from_object;
-        let q = w.inv_point(ray.o) + w.inv_vector(ray.d) * t;
+        let q = self.local_origin(ray.o) + self.world_from_object.inv_vector(ray.d) * t;
         self.surface(face, q)
     }
 
     /// The surface of `face` at the object-space point `q` (snapped onto the face).
+    #[inline]
     pub fn surface(&self, face: u32, q: Point3) -> LocalGeometry {
-        let w = &self.world_from_object;
         let axis = (face / 2) as usize;
         let sign = if face % 2 == 1 { 1.0 } else { -1.0 };
         // Snap onto the face and keep the other coordinates on the cube.
         let clamp = |x: f32| x.clamp(-1.0, 1.0);
         let mut q = Point3::new(clamp(q.x), clamp(q.y), clamp(q.z));
-        let mut n = Vec3::ZERO;
         match axis {
-            0 => {
-                q.x = sign;
-                n.x = sign;
-            }
-            1 => {
-                q.y = sign;
-                n.y = sign;
-            }
-            _ => {
-                q.z = sign;
-                n.z = sign;
-            }
+            0 => q.x = sign,
+            1 => q.y = sign,
+            _ => q.z = sign,
         }
-        let (a, b, tangent) = match axis {
-            0 => (q.y, q.z, Vec3::Y),
-            1 => (q.x, q.z, Vec3::X),
-            _ => (q.x, q.y, Vec3::X),
+        let (a, b) = match axis {
+            0 => (q.y, q.z),
+            1 => (q.x, q.z),
+            _ => (q.x, q.y),
         };
-        let nw = w.normal(Normal3::new(n.x, n.y, n.z)).normalize();
+        let nw = self.faces.normals[face as usize];
+        let p = if self.affine {
+            affine_point(&self.world_from_object.m, q)
+        } else {
+            self.world_from_object.point(q)
+        };
         LocalGeometry {
-            p: w.point(q),
+            p,
             n: nw,
             ns: nw,
             uv: Point2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5),
-            dpdu: w.vector(tangent * 2.0),
+            dpdu: self.faces.dpdu[axis],
         }
+    }
+
+    /// The shading frame of `face` (the same at every point of the face), as
+    /// [`Frame::from_normal_tangent`] computes it from the face's [`LocalGeometry`].
+    #[inline]
+    pub fn face_frame(&self, face: u32) -> Frame {
+        self.faces.frames[face as usize]
     }
 
     /// The world-space area of each face (faces `2·axis + side`).

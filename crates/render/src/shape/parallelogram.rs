@@ -5,7 +5,7 @@
 //! normal is v × w normalised.
 
 use super::{LocalGeometry, ShapeHit};
-use crate::math::{Bounds3, Normal3, Point2, Point3, Ray, Vec3};
+use crate::math::{Bounds3, Frame, Normal3, Point2, Point3, Ray, Vec3};
 
 /// A parallelogram in world space.
 #[derive(Clone, Debug, PartialEq)]
@@ -18,6 +18,10 @@ pub struct Parallelogram {
     pub w: Vec3,
     /// v × w.
     n: Vec3,
+    /// The unit normal v × w / |v × w|.
+    unit_n: Normal3,
+    /// The shading frame (the same everywhere): around the normal, with `v` as tangent.
+    frame: Frame,
     /// Dual vectors: s = (x − p)·ds, t = (x − p)·dt for x in the plane.
     ds: Vec3,
     dt: Vec3,
@@ -31,11 +35,14 @@ impl Parallelogram {
         if !(nn > 0.0 && nn.is_finite()) {
             return None;
         }
+        let unit_n = n.normalize().to_normal();
         Some(Self {
             p,
             v,
             w,
             n,
+            unit_n,
+            frame: Frame::from_normal_tangent(unit_n, v),
             ds: w.cross(n) / nn,
             dt: n.cross(v) / nn,
         })
@@ -63,8 +70,9 @@ impl Parallelogram {
     }
 
     /// The surface at (s, t).
+    #[inline]
     pub fn geometry(&self, s: f32, t: f32) -> LocalGeometry {
-        let n = self.normal();
+        let n = self.unit_n;
         LocalGeometry {
             p: self.p + self.v * s + self.w * t,
             n,
@@ -75,8 +83,16 @@ impl Parallelogram {
     }
 
     /// The unit normal v × w / |v × w|.
+    #[inline]
     pub fn normal(&self) -> Normal3 {
-        self.n.normalize().to_normal()
+        self.unit_n
+    }
+
+    /// The shading frame of every point: [`Frame::from_normal_tangent`] of the normal and
+    /// ∂p/∂u = `v`.
+    #[inline]
+    pub fn frame(&self) -> Frame {
+        self.frame
     }
 
     /// Area |v × w|.
