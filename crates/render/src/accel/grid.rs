@@ -10,16 +10,27 @@
 //! per primitive (many huge primitives), the resolution is halved until they do not.
 //!
 //! Every primitive is referenced from each cell its box, grown by the margin (`accel::margin`),
-//! overlaps (inclusive, so a primitive touching a cell boundary goes into both cells). The cell
-//! lists are stored in CSR form: `offsets[c]..offsets[c + 1]` indexes `prims`, with one
-//! occupancy bit per cell so that empty cells are skipped without reading the offsets.
+//! overlaps (inclusive, so a primitive touching a cell boundary goes into both cells). The cells
+//! are numbered in blocks of [`BLOCK`]³ (a block is a *macro cell*; the grid is padded to whole
+//! blocks), block after block, x fastest both between and within blocks. One occupancy bit per
+//! cell (the bits of a block fill one 64-byte line) lets empty cells be skipped, and one bit
+//! per block (a few KiB, so it stays in L1) lets empty blocks be crossed at once. Only the
+//! non-empty cells have lists, in CSR form in that order: the `r`-th non-empty cell lists
+//! `prims[offsets[r]..offsets[r + 1]]`, where `r` is the count of non-empty cells in earlier
+//! blocks plus the set bits before the cell's own in its block (so most of the grid, empty,
+//! costs little more than a bit a cell, not a 4-byte offset).
 //!
 //! Traversal: the 3D digital differential analyser of Amanatides and Woo ("A Fast Voxel
 //! Traversal Algorithm for Ray Tracing", Eurographics 1987) walks the cells pierced by the ray
 //! from its entry into the grid, in order. The parameter of the next boundary on each axis is
-//! recomputed from the boundary's coordinate at every step (no accumulated increments). A hit
-//! found in a cell may lie in a later cell, so the walk only stops once the next cell starts
-//! beyond `t_limit` of the best hit; shadow rays stop at the first hit.
+//! recomputed from the boundary's coordinate at every step (no accumulated increments), so it
+//! is a function of the boundary alone. An empty block is left in one move: its exit is the
+//! first of its three far faces (boundaries of cells too), and on the other axes the walk
+//! jumps to the cell it would have reached by then, comparing the same boundary parameters
+//! the cell-by-cell walk compares, with its tie order; the non-empty cells are thus visited
+//! exactly as by the cell-by-cell walk. A hit found in a cell may lie in a later cell, so the
+//! walk only stops once the next cell starts beyond `t_limit` of the best hit; shadow rays stop
+//! at the first hit.
 
 use super::{
     clip, inflate, inv_dir, margin, t_limit, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
@@ -34,26 +45,53 @@ use crate::stats::RayStats;
 pub const CELLS_PER_PRIM: f32 = 4.0;
 /// Largest resolution along one axis.
 pub const MAX_RES: u32 = 512;
-/// Largest number of cells (64 MiB of offsets).
+/// Largest number of cells (the build counts the references of each cell in 4 bytes).
 pub const MAX_CELLS: u64 = 1 << 24;
 /// Target number of references per occupied cell when refining.
 pub const DENSE_CELL: f64 = 4.0;
 /// When the cell references exceed this many per primitive (plus a constant), the resolution
 /// is halved.
 pub const MAX_REFS_PER_PRIM: u64 = 32;
+/// Side of a block (macro cell), in cells.
+pub const BLOCK: u32 = 8;
+/// log2 of [`BLOCK`].
+const BLOCK_SHIFT: u32 = 3;
+/// log2 of the number of cells in a block.
+const BLOCK_CELLS_SHIFT: u32 = 3 * BLOCK_SHIFT;
+
+/// The occupancy bits of one block, aligned to a cache line: bit `i` of word `w` for the cell
+/// at place `64 w + i` in the block.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+struct BlockBits([u64; 8]);
+
+/// Where the lists of a block's non-empty cells start among all non-empty cells.
+#[derive(Clone, Copy, Debug, Default)]
+struct BlockRank {
+    /// The number of non-empty cells in earlier blocks.
+    base: u32,
+    /// The number of non-empty cells of the block before each word of its [`BlockBits`].
+    prefix: [u16; 8],
+}
 
 /// A uniform grid over the bounded primitives of a geometry.
 #[derive(Clone, Debug, Default)]
 pub struct Grid {
     bounds: Bounds3,
     res: [u32; 3],
+    /// The resolution in blocks.
+    blocks: [u32; 3],
     width: [f32; 3],
     inv_width: [f32; 3],
+    /// Where the list of each non-empty cell starts in `prims`, and the end of the last one.
     offsets: Vec<u32>,
     prims: Vec<u32>,
-    /// One bit per cell, set when the cell is not empty (small enough to stay in cache, so
-    /// that the walk through empty cells does not touch `offsets`).
-    occupied: Vec<u64>,
+    /// One bit per cell (by block), set when the cell is not empty.
+    occupied: Vec<BlockBits>,
+    /// The rank of each block's first non-empty cell, for `offsets`.
+    ranks: Vec<BlockRank>,
+    /// One bit per block, set when any of its cells is not empty.
+    block_occupied: Vec<u64>,
 }
 
 impl Grid {
@@ -85,7 +123,7 @@ impl Grid {
                 refined = true;
                 continue;
             }
-            let count = g.count(&boxes, cells as usize);
+            let count = g.count(&boxes);
             if !refined {
                 refined = true;
                 // Primitives on a surface crowd a thin shell of cells: refine once so that the
@@ -114,36 +152,59 @@ impl Grid {
         Self {
             bounds,
             res,
+            blocks: res.map(|r| r.div_ceil(BLOCK)),
             width: std::array::from_fn(|a| d[a] / res[a] as f32),
             inv_width: std::array::from_fn(|a| res[a] as f32 / d[a]),
             offsets: Vec::new(),
             prims: Vec::new(),
             occupied: Vec::new(),
+            ranks: Vec::new(),
+            block_occupied: Vec::new(),
         }
     }
 
-    /// The number of references of each cell, shifted by one (`count[c + 1]` for cell `c`).
-    fn count(&self, boxes: &[Bounds3], cells: usize) -> Vec<u32> {
-        let mut count = vec![0u32; cells + 1];
+    /// The number of blocks.
+    fn block_count(&self) -> usize {
+        self.blocks.iter().map(|&b| b as usize).product()
+    }
+
+    /// The number of references of each cell (by linear index, padding included), shifted by
+    /// one (`count[c + 1]` for cell `c`).
+    fn count(&self, boxes: &[Bounds3]) -> Vec<u32> {
+        let mut count = vec![0u32; (self.block_count() << BLOCK_CELLS_SHIFT) + 1];
         for b in boxes {
             self.for_each_cell(b, |c| count[c + 1] += 1);
         }
         count
     }
 
-    /// Fills the CSR lists from the counts: prefix sums, then scatter.
+    /// Fills the occupancy bits, and the CSR lists of the non-empty cells from the counts:
+    /// prefix sums, scatter, then the starts of the non-empty cells' lists.
     fn fill(&mut self, prims: &[BuildPrim], boxes: &[Bounds3], mut count: Vec<u32>, refs: usize) {
         let cells = count.len() - 1;
-        self.occupied = vec![0u64; cells.div_ceil(64)];
+        self.occupied = vec![BlockBits::default(); self.block_count()];
+        self.ranks = vec![BlockRank::default(); self.block_count()];
+        self.block_occupied = vec![0u64; self.block_count().div_ceil(64)];
+        let mut offsets = Vec::new();
         for c in 0..cells {
-            if count[c + 1] > 0 {
-                self.occupied[c / 64] |= 1 << (c % 64);
+            let (b, w) = (c >> BLOCK_CELLS_SHIFT, (c >> 6) & 7);
+            if c % 64 == 0 {
+                let rank = offsets.len() as u32;
+                if w == 0 {
+                    self.ranks[b].base = rank;
+                }
+                self.ranks[b].prefix[w] = (rank - self.ranks[b].base) as u16;
             }
-        }
-        for c in 0..cells {
+            if count[c + 1] > 0 {
+                self.occupied[b].0[w] |= 1 << (c % 64);
+                self.block_occupied[b / 64] |= 1 << (b % 64);
+                offsets.push(count[c]);
+            }
             count[c + 1] += count[c];
         }
-        let mut cursor = count.clone();
+        offsets.push(count[cells]);
+        // The lists, in the order of the cells, at the starts just recorded.
+        let mut cursor = count;
         let mut list = vec![0u32; refs];
         for (p, b) in prims.iter().zip(boxes) {
             self.for_each_cell(b, |c| {
@@ -151,7 +212,7 @@ impl Grid {
                 cursor[c] += 1;
             });
         }
-        self.offsets = count;
+        self.offsets = offsets;
         self.prims = list;
     }
 
@@ -174,13 +235,42 @@ impl Grid {
     /// The cell holding coordinate `x` on axis `a`, clamped to the grid (NaN gives 0).
     #[inline(always)]
     fn cell(&self, a: usize, x: f32) -> u32 {
-        let c = ((x - self.bounds.min[a]) * self.inv_width[a]).floor() as i64;
+        // Truncation is the floor for the non-negative values the clamp keeps (and saturates,
+        // with NaN to 0).
+        let c = ((x - self.bounds.min[a]) * self.inv_width[a]) as i64;
         c.clamp(0, self.res[a] as i64 - 1) as u32
     }
 
+    /// The linear index of cell `c`: its block's index (x fastest) times the cells of a block,
+    /// plus its place in the block (x fastest).
     #[inline(always)]
     fn index(&self, c: [u32; 3]) -> usize {
-        (c[0] + self.res[0] * (c[1] + self.res[1] * c[2])) as usize
+        let b = |a: usize| c[a] >> BLOCK_SHIFT;
+        let l = |a: usize| c[a] & (BLOCK - 1);
+        let block = b(0) + self.blocks[0] * (b(1) + self.blocks[1] * b(2));
+        ((block as usize) << BLOCK_CELLS_SHIFT)
+            | (l(0) | l(1) << BLOCK_SHIFT | l(2) << (2 * BLOCK_SHIFT)) as usize
+    }
+
+    /// The primitives of cell `c` (linear index), `None` when it is empty.
+    #[inline(always)]
+    fn cell_prims(&self, c: usize) -> Option<&[u32]> {
+        let (b, w) = (c >> BLOCK_CELLS_SHIFT, (c >> 6) & 7);
+        let bits = self.occupied[b].0[w];
+        if bits >> (c % 64) & 1 == 0 {
+            return None;
+        }
+        let below = bits & ((1u64 << (c % 64)) - 1);
+        let rank = &self.ranks[b];
+        let r = (rank.base + rank.prefix[w] as u32 + below.count_ones()) as usize;
+        Some(&self.prims[self.offsets[r] as usize..self.offsets[r + 1] as usize])
+    }
+
+    /// True when the block of cell `c` (linear index) is not empty.
+    #[inline(always)]
+    fn block_of_occupied(&self, c: usize) -> bool {
+        let b = c >> BLOCK_CELLS_SHIFT;
+        self.block_occupied[b / 64] >> (b % 64) & 1 == 1
     }
 
     /// The resolution on each axis.
@@ -188,9 +278,9 @@ impl Grid {
         self.res
     }
 
-    /// Number of cells.
+    /// Number of cells (without the padding to whole blocks).
     pub fn cell_count(&self) -> usize {
-        self.offsets.len().saturating_sub(1)
+        self.res.iter().map(|&r| r as usize).product()
     }
 
     /// Number of primitive references (a primitive counts once per cell).
@@ -198,21 +288,20 @@ impl Grid {
         self.prims.len()
     }
 
-    /// Memory used by the cell offsets and primitive lists, in bytes.
+    /// Memory used by the cell offsets, primitive lists, occupancy bits and block ranks, in
+    /// bytes.
     pub fn memory(&self) -> usize {
-        (self.offsets.len() + self.prims.len()) * 4 + self.occupied.len() * 8
-    }
-
-    /// The primitives of cell `c` (linear index).
-    #[inline(always)]
-    fn cell_prims(&self, c: usize) -> &[u32] {
-        &self.prims[self.offsets[c] as usize..self.offsets[c + 1] as usize]
+        (self.offsets.len() + self.prims.len()) * 4
+            + std::mem::size_of_val(self.occupied.as_slice())
+            + std::mem::size_of_val(self.ranks.as_slice())
+            + self.block_occupied.len() * 8
     }
 
     /// Walks the cells pierced by `ray` in order while `v` wants to go on; returns the number
-    /// of cells visited.
+    /// of cells visited (an empty block crossed at once counts as one). Empty blocks are
+    /// crossed at once only when `blocks` (the tests compare with the cell-by-cell walk).
     #[inline(always)]
-    fn traverse(&self, ray: &Ray, v: &mut impl CellVisitor) -> u64 {
+    fn traverse(&self, ray: &Ray, v: &mut impl CellVisitor, blocks: bool) -> u64 {
         if self.prims.is_empty() {
             return 0;
         }
@@ -222,14 +311,23 @@ impl Grid {
         };
         let end = t_limit(t1);
         let mut dda = Dda::new(self, ray, inv, t0);
+        dda.blockwise &= blocks;
         let mut visited = 0u64;
         loop {
             visited += 1;
-            let c = dda.linear;
-            if self.occupied[c / 64] >> (c % 64) & 1 == 1 && !v.cell(self.cell_prims(c)) {
-                break;
+            let c = self.index(dda.cell.map(|x| x as u32));
+            if !self.block_of_occupied(c) {
+                match dda.leave_block(v.limit().min(end)) {
+                    Leave::Moved => continue,
+                    Leave::End => break,
+                    Leave::Step => {}
+                }
+            } else if let Some(prims) = self.cell_prims(c) {
+                if !v.cell(prims) {
+                    break;
+                }
             }
-            if !dda.advance(self, ray, inv, v.limit().min(end)) {
+            if !dda.advance(v.limit().min(end)) {
                 break;
             }
         }
@@ -238,23 +336,44 @@ impl Grid {
 
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        ClosestVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
+        ClosestVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v, true))
     }
 
     /// True when any primitive is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        AnyVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v))
+        AnyVisitor::run(geometry, ray, stats, |v| self.traverse(ray, v, true))
     }
 }
 
-/// The state of the 3D-DDA walk: the current cell and the parameter of the next boundary on
-/// each axis.
+/// What [`Dda::leave_block`] did.
+enum Leave {
+    /// Moved to the first cell after the block.
+    Moved,
+    /// The walk ends within the block or at its exit.
+    End,
+    /// Nothing (parameters might be NaN): take one cell-by-cell step instead.
+    Step,
+}
+
+/// The state of the 3D-DDA walk: the current cell, the parameter of the next boundary on each
+/// axis, and the ray's terms of the boundary parameters.
 struct Dda {
-    cell: [u32; 3],
-    linear: usize,
+    cell: [i32; 3],
     /// −1, 0 or +1 per axis.
     step: [i32; 3],
     next: [f32; 3],
+    /// The cell index just outside the grid in the step direction, per axis.
+    out: [i32; 3],
+    /// Resolution per axis.
+    res: [i32; 3],
+    lo: [f32; 3],
+    width: [f32; 3],
+    o: [f32; 3],
+    inv: [f32; 3],
+    /// True when no boundary parameter can be NaN: the grid's terms and the origin are finite,
+    /// and so is the reciprocal direction on each axis the ray moves along (then it is not 0
+    /// either, and a product is NaN only as 0 · ∞).
+    blockwise: bool,
 }
 
 impl Dda {
@@ -262,7 +381,7 @@ impl Dda {
     #[inline(always)]
     fn new(g: &Grid, ray: &Ray, inv: Vec3, t0: f32) -> Self {
         let p = ray.at(t0);
-        let cell: [u32; 3] = std::array::from_fn(|a| g.cell(a, p[a]));
+        let cell: [i32; 3] = std::array::from_fn(|a| g.cell(a, p[a]) as i32);
         let step: [i32; 3] = std::array::from_fn(|a| {
             if ray.d[a] > 0.0 {
                 1
@@ -272,57 +391,160 @@ impl Dda {
                 0
             }
         });
+        let res = g.res.map(|r| r as i32);
         let mut d = Self {
             cell,
-            linear: g.index(cell),
             step,
             next: [f32::INFINITY; 3],
+            out: std::array::from_fn(|a| if step[a] > 0 { res[a] } else { -1 }),
+            res,
+            lo: [g.bounds.min.x, g.bounds.min.y, g.bounds.min.z],
+            width: g.width,
+            o: [ray.o.x, ray.o.y, ray.o.z],
+            inv: [inv.x, inv.y, inv.z],
+            blockwise: false,
         };
+        d.blockwise = (0..3).all(|a| {
+            d.lo[a].is_finite()
+                && d.width[a].is_finite()
+                && d.o[a].is_finite()
+                && (step[a] == 0 || d.inv[a].is_finite())
+        });
         for a in 0..3 {
-            d.next[a] = d.boundary(g, ray, inv, a);
+            d.next[a] = d.boundary(a);
         }
         d
     }
 
+    /// The parameter of the boundary of index `k` (coordinate `min + k · width`) on axis `a`.
+    #[inline(always)]
+    fn param(&self, a: usize, k: i32) -> f32 {
+        let x = self.lo[a] + k as f32 * self.width[a];
+        (x - self.o[a]) * self.inv[a]
+    }
+
     /// The parameter where the ray leaves the current cell through its boundary on axis `a`.
     #[inline(always)]
-    fn boundary(&self, g: &Grid, ray: &Ray, inv: Vec3, a: usize) -> f32 {
+    fn boundary(&self, a: usize) -> f32 {
         if self.step[a] == 0 {
             return f32::INFINITY;
         }
-        let k = self.cell[a] + (self.step[a] > 0) as u32;
-        let x = g.bounds.min[a] + k as f32 * g.width[a];
-        (x - ray.o[a]) * inv[a]
+        self.param(a, self.cell[a] + (self.step[a] > 0) as i32)
     }
 
     /// Moves to the next cell when it starts at or before `stop`; false when the walk ends
-    /// (beyond `stop`, out of the grid, or nowhere to go).
+    /// (beyond `stop`, out of the grid, or nowhere to go). The next cell is across the nearest
+    /// boundary, ties to the later axis; the axis is a constant in each branch so that the
+    /// state stays in registers.
     #[inline(always)]
-    fn advance(&mut self, g: &Grid, ray: &Ray, inv: Vec3, stop: f32) -> bool {
-        let a = if self.next[0] < self.next[1] {
-            if self.next[0] < self.next[2] {
-                0
+    fn advance(&mut self, stop: f32) -> bool {
+        let n = self.next;
+        if n[0] < n[1] {
+            if n[0] < n[2] {
+                self.cross::<0>(stop)
             } else {
-                2
+                self.cross::<2>(stop)
             }
-        } else if self.next[1] < self.next[2] {
-            1
+        } else if n[1] < n[2] {
+            self.cross::<1>(stop)
         } else {
-            2
-        };
-        let exit = self.next[a];
-        // NaN and infinity end the walk as well.
-        if !(exit <= stop) || exit == f32::INFINITY || self.step[a] == 0 {
+            self.cross::<2>(stop)
+        }
+    }
+
+    /// [`Dda::advance`] across the boundary on axis `A`.
+    #[inline(always)]
+    fn cross<const A: usize>(&mut self, stop: f32) -> bool {
+        let exit = self.next[A];
+        // NaN and infinity end the walk as well (an axis the ray does not move along has an
+        // infinite parameter).
+        if !(exit <= stop) || exit == f32::INFINITY {
             return false;
         }
-        let c = self.cell[a] as i32 + self.step[a];
-        if c < 0 || c >= g.res[a] as i32 {
+        let c = self.cell[A] + self.step[A];
+        if c == self.out[A] {
             return false;
         }
-        self.cell[a] = c as u32;
-        self.linear = g.index(self.cell);
-        self.next[a] = self.boundary(g, ray, inv, a);
+        self.cell[A] = c;
+        self.next[A] = self.boundary(A);
         true
+    }
+
+    /// Leaves the current block, which is empty, in one move, ending where the cell-by-cell
+    /// walk (`advance` with the same `stop`) would enter the next block.
+    ///
+    /// That walk crosses the boundaries of all axes in the order of their parameters, ties to
+    /// the later axis, so it leaves the block through the first of the block's far faces in
+    /// that order (axis `a`, parameter `t`); by then it has crossed exactly the boundaries of
+    /// each other axis `b` that come before (`< t`, or `= t` when `b > a`), all inside the
+    /// block since its far face on `b` does not. The cells of the block are empty, so
+    /// nothing is missed; where the walk ends in the block or at its exit, so does this. The
+    /// order needs parameters that are never NaN: unless `blockwise`, nothing is done.
+    #[inline(always)]
+    fn leave_block(&mut self, stop: f32) -> Leave {
+        if !self.blockwise {
+            return Leave::Step;
+        }
+        let k: [i32; 3] = std::array::from_fn(|b| {
+            let first = self.cell[b] >> BLOCK_SHIFT << BLOCK_SHIFT;
+            if self.step[b] > 0 {
+                (first + BLOCK as i32).min(self.res[b])
+            } else {
+                first
+            }
+        });
+        let far: [f32; 3] = std::array::from_fn(|b| {
+            if self.step[b] == 0 {
+                f32::INFINITY
+            } else {
+                self.param(b, k[b])
+            }
+        });
+        if far[0] < far[1] {
+            if far[0] < far[2] {
+                self.leave_through::<0>(far[0], k[0], stop)
+            } else {
+                self.leave_through::<2>(far[2], k[2], stop)
+            }
+        } else if far[1] < far[2] {
+            self.leave_through::<1>(far[1], k[1], stop)
+        } else {
+            self.leave_through::<2>(far[2], k[2], stop)
+        }
+    }
+
+    /// [`Dda::leave_block`] through the block's far face on axis `A`, boundary `k` at `t`.
+    #[inline(always)]
+    fn leave_through<const A: usize>(&mut self, t: f32, k: i32, stop: f32) -> Leave {
+        if !(t <= stop) || t == f32::INFINITY {
+            return Leave::End;
+        }
+        let c = if self.step[A] > 0 { k } else { k - 1 };
+        if c == self.out[A] {
+            return Leave::End;
+        }
+        if A != 0 {
+            self.catch_up::<0>(t, false);
+        }
+        if A != 1 {
+            self.catch_up::<1>(t, A < 1);
+        }
+        if A != 2 {
+            self.catch_up::<2>(t, A < 2);
+        }
+        self.cell[A] = c;
+        self.next[A] = self.boundary(A);
+        Leave::Moved
+    }
+
+    /// Crosses the boundaries on axis `B` (not the exit axis) that come before `t`, and those
+    /// at `t` when `ties`; an infinite `next` (no motion on `B`) is never crossed.
+    #[inline(always)]
+    fn catch_up<const B: usize>(&mut self, t: f32, ties: bool) {
+        while self.next[B] < t || (ties && self.next[B] == t) {
+            self.cell[B] += self.step[B];
+            self.next[B] = self.boundary(B);
+        }
     }
 }
 
@@ -436,6 +658,104 @@ mod tests {
         let r = Ray::new(Point3::new(-9.0, -0.5, 3.0), Vec3::new(0.1, 0.0, -1.0));
         assert_eq!(gr.intersect(&g, &r, &mut st).unwrap().prim, 0);
         agrees_with_list(&g, &gr);
+    }
+
+    /// Records the lists of the non-empty cells visited; stops after `stop_after` of them and
+    /// visits cells entered up to `limit`.
+    struct Recorder {
+        cells: Vec<(usize, usize)>,
+        limit: f32,
+        stop_after: usize,
+    }
+
+    impl CellVisitor for Recorder {
+        fn cell(&mut self, prims: &[u32]) -> bool {
+            self.cells.push((prims.as_ptr() as usize, prims.len()));
+            self.cells.len() < self.stop_after
+        }
+        fn limit(&self) -> f32 {
+            self.limit
+        }
+    }
+
+    #[test]
+    fn crossing_empty_blocks_visits_the_same_cells() {
+        // A bumpy shell of triangles (empty blocks inside and around it) and two flat ones
+        // across it, at z = 0 and x = 1.
+        let mut tris = vec![
+            [
+                Point3::new(-2.0, -2.0, 0.0),
+                Point3::new(2.0, -2.0, 0.0),
+                Point3::new(0.0, 2.0, 0.0),
+            ],
+            [
+                Point3::new(1.0, -1.0, -1.0),
+                Point3::new(1.0, 1.0, -1.0),
+                Point3::new(1.0, 0.0, 1.0),
+            ],
+        ];
+        let n = 40;
+        for i in 0..n {
+            for j in 0..n {
+                let p = |i: usize, j: usize| {
+                    let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+                    let (th, ph) = (u * std::f32::consts::TAU, v * std::f32::consts::PI);
+                    let r = 3.0 + 0.2 * (5.0 * th).sin() * (3.0 * ph).cos();
+                    Point3::new(
+                        r * ph.sin() * th.cos(),
+                        r * ph.sin() * th.sin(),
+                        r * ph.cos(),
+                    )
+                };
+                tris.push([p(i, j), p(i + 1, j), p(i, j + 1)]);
+                tris.push([p(i + 1, j), p(i + 1, j + 1), p(i, j + 1)]);
+            }
+        }
+        {
+            let g = triangles(&tris);
+            let gr = grid(&g);
+            assert!(gr.res.iter().all(|&r| r > 2 * BLOCK), "{:?}", gr.res);
+            let mut rng = crate::sampling::Pcg32::new(3, 9);
+            let mut f = |s: f32| (rng.next_f32() - 0.5) * s;
+            let mut walked = 0;
+            for i in 0..6000 {
+                let mut o = Point3::new(f(12.0), f(12.0), f(12.0));
+                let mut d = Vec3::new(f(2.0), f(2.0), f(2.0));
+                // Some rays along an axis or a diagonal, from corners of cells (boundaries
+                // crossed at equal parameters).
+                if i % 2 == 0 {
+                    let k = [0, 1, 2].map(|_| (f(2.0).abs() * gr.res[0] as f32) as i32);
+                    o = Point3::new(
+                        gr.bounds.min.x + k[0] as f32 * gr.width[0],
+                        gr.bounds.min.y + k[1] as f32 * gr.width[1],
+                        gr.bounds.min.z + k[2] as f32 * gr.width[2],
+                    );
+                    let s = |b: usize| if i >> b & 1 == 1 { 1.0 } else { -1.0 };
+                    d = [
+                        Vec3::new(s(2), s(3), 0.0),
+                        Vec3::new(s(2), 0.0, s(3)),
+                        Vec3::new(0.0, s(2), s(3)),
+                        Vec3::new(s(2), s(3), s(4)),
+                        Vec3::X * s(2),
+                    ][i / 32 % 5];
+                }
+                let ray = Ray::new(o, d);
+                for (limit, stop_after) in [(f32::INFINITY, usize::MAX), (f(20.0).abs(), 3)] {
+                    let [by_block, by_cell] = [true, false].map(|blocks| {
+                        let mut v = Recorder {
+                            cells: Vec::new(),
+                            limit,
+                            stop_after,
+                        };
+                        gr.traverse(&ray, &mut v, blocks);
+                        v.cells
+                    });
+                    walked += by_cell.len();
+                    assert_eq!(by_block, by_cell, "{ray:?}");
+                }
+            }
+            assert!(walked > 1000, "{walked}");
+        }
     }
 
     #[test]
