@@ -157,7 +157,7 @@ impl Geometry {
     }
 
     /// The full interaction for a hit found along `ray`.
-    #[inline]
+    #[inline(always)]
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
         let sh = ShapeHit {
             t: hit.t,
@@ -286,7 +286,7 @@ impl Scene {
     }
 
     /// The closest hit's full interaction.
-    #[inline]
+    #[inline(always)]
     pub fn interact(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfaceInteraction> {
         self.intersect(ray, stats)
             .map(|h| self.geometry.interaction(ray, &h))

@@ -188,6 +188,11 @@ impl AreaLight {
         u: [f32; 2],
     ) -> Option<LightSample> {
         let emission = &emissions[self.emission as usize];
+        // Parallelograms (the usual area light) on a straight path of their own, so that the
+        // sampled point stays in registers.
+        if let AreaShape::Parallelogram(q) = &self.shape {
+            return area_sample(emission, p, q.geometry(u[0], u[1]), self.inv_area);
+        }
         if let AreaShape::Sphere {
             sphere,
             cone: Some((c, r)),
@@ -222,23 +227,7 @@ impl AreaLight {
             }
         }
         let (g, pdf_area) = self.sample_area(geometry, u)?;
-        let to = g.p - p;
-        let d2 = to.squared_norm();
-        if !(d2 > 0.0) {
-            return None;
-        }
-        let wi = to / d2.sqrt();
-        let cos = g.n.dot_vec(wi).abs();
-        if !(cos > 0.0) {
-            return None;
-        }
-        Some(LightSample {
-            wi,
-            li: emission.radiance_at(g.uv, g.n, -wi),
-            pdf: pdf_area * d2 / cos,
-            delta: false,
-            target: Target::Surface(g.p, g.n),
-        })
+        area_sample(emission, p, g, pdf_area)
     }
 
     /// The solid-angle density with which [`AreaLight::sample`] picks the point `q` (normal `n`)
@@ -274,6 +263,34 @@ impl AreaLight {
         let e = &emissions[self.emission as usize];
         e.radiance.average() * (PI * self.area * if e.two_sided { 2.0 } else { 1.0 })
     }
+}
+
+/// The light sample for the point `g` of an emitter, drawn with area density `pdf_area`, as
+/// seen from `p`.
+#[inline(always)]
+fn area_sample(
+    emission: &Emission,
+    p: Point3,
+    g: LocalGeometry,
+    pdf_area: f32,
+) -> Option<LightSample> {
+    let to = g.p - p;
+    let d2 = to.squared_norm();
+    if !(d2 > 0.0) {
+        return None;
+    }
+    let wi = to / d2.sqrt();
+    let cos = g.n.dot_vec(wi).abs();
+    if !(cos > 0.0) {
+        return None;
+    }
+    Some(LightSample {
+        wi,
+        li: emission.radiance_at(g.uv, g.n, -wi),
+        pdf: pdf_area * d2 / cos,
+        delta: false,
+        target: Target::Surface(g.p, g.n),
+    })
 }
 
 /// The surface area of an ellipsoid with semi-axes a, b, c (Knud Thomsen's formula, within

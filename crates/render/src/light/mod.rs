@@ -95,6 +95,14 @@ pub struct LightSample {
     pub target: Target,
 }
 
+impl LightSample {
+    /// A positive density, a finite direction and some radiance.
+    #[inline(always)]
+    fn usable(&self) -> bool {
+        self.pdf > 0.0 && self.wi.is_finite() && !self.li.is_black()
+    }
+}
+
 /// What the local model receives from one light at a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LocalIllumination {
@@ -156,6 +164,12 @@ impl Light {
         p: Point3,
         u: [f32; 2],
     ) -> Option<LightSample> {
+        // Area lights first, on a path of their own (no merge with the other lights' samples).
+        if let Light::Area(a) = self {
+            return a
+                .sample(geometry, emissions, p, u)
+                .filter(LightSample::usable);
+        }
         let s = match self {
             Light::Point(l, _) => {
                 let to = l.position - p;
@@ -209,7 +223,7 @@ impl Light {
             }
             Light::Area(a) => a.sample(geometry, emissions, p, u)?,
         };
-        (s.pdf > 0.0 && s.wi.is_finite() && !s.li.is_black()).then_some(s)
+        s.usable().then_some(s)
     }
 
     /// The solid-angle density of sampling the point `q` (normal `n`) of this area light from

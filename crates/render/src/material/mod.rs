@@ -285,8 +285,18 @@ impl Bsdf<'_> {
     }
 
     /// [`Bsdf::eval`] for directions from [`Bsdf::local_wo`] and [`Bsdf::local_wi`].
-    #[inline]
+    #[inline(always)]
     pub fn eval_local(&self, o: Vec3, i: Vec3) -> Rgb {
+        // Lambert, the common case, without a call.
+        if let BsdfModel::Lambert(r) = &self.model {
+            return lambert::eval(*r, o, i);
+        }
+        self.eval_general(o, i)
+    }
+
+    /// [`Bsdf::eval_local`] for every model.
+    #[inline(never)]
+    fn eval_general(&self, o: Vec3, i: Vec3) -> Rgb {
         match &self.model {
             BsdfModel::Lambert(r) => lambert::eval(*r, o, i),
             BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => Rgb::BLACK,
@@ -308,8 +318,18 @@ impl Bsdf<'_> {
     }
 
     /// [`Bsdf::pdf`] for directions from [`Bsdf::local_wo`] and [`Bsdf::local_wi`].
-    #[inline]
+    #[inline(always)]
     pub fn pdf_local(&self, o: Vec3, i: Vec3) -> f32 {
+        // Lambert, the common case, without a call.
+        if let BsdfModel::Lambert(_) = &self.model {
+            return lambert::pdf(o, i);
+        }
+        self.pdf_general(o, i)
+    }
+
+    /// [`Bsdf::pdf_local`] for every model.
+    #[inline(never)]
+    fn pdf_general(&self, o: Vec3, i: Vec3) -> f32 {
         match &self.model {
             BsdfModel::Lambert(_) => lambert::pdf(o, i),
             BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => 0.0,
@@ -330,21 +350,21 @@ impl Bsdf<'_> {
     }
 
     /// [`Bsdf::sample`] for `wo` from [`Bsdf::local_wo`] (`o` and `flip`).
-    #[inline]
+    #[inline(always)]
     pub fn sample_local(&self, o: Vec3, flip: bool, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
-        let s = match &self.model {
-            BsdfModel::Lambert(r) => lambert::sample(*r, o, u2),
-            BsdfModel::Mirror { r, eta_k } => specular::sample(*r, *eta_k, o),
-            BsdfModel::RoughConductor { mf, eta_k, r } => conductor::sample(mf, *eta_k, *r, o, u2),
-            BsdfModel::Dielectric { eta, r, t } => dielectric::sample_smooth(*eta, *r, *t, o, u1),
-            BsdfModel::RoughDielectric { mf, eta, r, t } => {
-                dielectric::sample_rough(mf, *eta, *r, *t, o, u1, u2)
-            }
-            BsdfModel::Plastic(p) => p.sample(o, u1, u2),
-            BsdfModel::RoughPlastic(p) => p.sample(o, u1, u2),
-            BsdfModel::Phong(p) => p.sample(o, u1, u2),
-            BsdfModel::CookTorrance(c) => c.sample(o, u1, u2),
+        // Lambert, the common case, without a call.
+        let s = if let BsdfModel::Lambert(r) = &self.model {
+            lambert::sample(*r, o, u2)
+        } else {
+            self.sample_general(o, u1, u2)
         }?;
+        self.world_sample(s, flip)
+    }
+
+    /// The local sample `s` in world space (mirrored back when `wo` was), or `None` when not
+    /// finite.
+    #[inline(always)]
+    fn world_sample(&self, s: LocalSample, flip: bool) -> Option<BsdfSample> {
         let mut wi = s.wi;
         if flip {
             wi.z = -wi.z;
@@ -357,6 +377,24 @@ impl Bsdf<'_> {
             delta: s.delta,
             eta: s.eta,
         })
+    }
+
+    /// The local sample of every model.
+    #[inline(never)]
+    fn sample_general(&self, o: Vec3, u1: f32, u2: [f32; 2]) -> Option<LocalSample> {
+        match &self.model {
+            BsdfModel::Lambert(r) => lambert::sample(*r, o, u2),
+            BsdfModel::Mirror { r, eta_k } => specular::sample(*r, *eta_k, o),
+            BsdfModel::RoughConductor { mf, eta_k, r } => conductor::sample(mf, *eta_k, *r, o, u2),
+            BsdfModel::Dielectric { eta, r, t } => dielectric::sample_smooth(*eta, *r, *t, o, u1),
+            BsdfModel::RoughDielectric { mf, eta, r, t } => {
+                dielectric::sample_rough(mf, *eta, *r, *t, o, u1, u2)
+            }
+            BsdfModel::Plastic(p) => p.sample(o, u1, u2),
+            BsdfModel::RoughPlastic(p) => p.sample(o, u1, u2),
+            BsdfModel::Phong(p) => p.sample(o, u1, u2),
+            BsdfModel::CookTorrance(c) => c.sample(o, u1, u2),
+        }
     }
 
     /// True when every component is a Dirac delta (light sampling cannot help).
@@ -389,7 +427,22 @@ impl Material {
     }
 
     /// The BSDF at a point with shading frame `frame` and surface coordinates `uv`.
+    #[inline(always)]
     pub fn bsdf(&self, frame: Frame, uv: Point2) -> Bsdf<'_> {
+        // Diffuse surfaces, the common case, without a call.
+        if let Model::Diffuse { reflectance } = &self.model {
+            return Bsdf {
+                model: BsdfModel::Lambert(reflectance.eval(uv)),
+                frame,
+                two_sided: self.two_sided,
+            };
+        }
+        self.bsdf_general(frame, uv)
+    }
+
+    /// [`Material::bsdf`] for every model.
+    #[inline(never)]
+    fn bsdf_general(&self, frame: Frame, uv: Point2) -> Bsdf<'_> {
         let model = match &self.model {
             Model::Diffuse { reflectance } => BsdfModel::Lambert(reflectance.eval(uv)),
             Model::Specular { reflectance } => BsdfModel::Mirror {

@@ -151,9 +151,11 @@ impl Sampler {
                 // scrambled points are R(LK(R(vdc(i)))) = R(LK(i)) and R(LK(R(sobol1(i)))) =
                 // R(LK(G(r))) with G = R∘sobol1∘R, so only three reversals remain.
                 let r = laine_karras(self.rindex, s.shuffle);
-                let x = laine_karras(r.reverse_bits(), s.x).reverse_bits();
-                let y = laine_karras(sobol_dim1_reversed(r), s.y).reverse_bits();
-                [to_unit(x), to_unit(y)]
+                let x = laine_karras(r.reverse_bits(), s.x);
+                let y = laine_karras(sobol_dim1_reversed(r), s.y);
+                // Both final reversals in one: reversing the 64 bits of (x, y) gives (R(y), R(x)).
+                let xy = ((x as u64) << 32 | y as u64).reverse_bits();
+                [to_unit(xy as u32), to_unit((xy >> 32) as u32)]
             }
             None => {
                 let a = self.rng.next_f32();
