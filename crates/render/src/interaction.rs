@@ -110,7 +110,8 @@ impl SurfaceInteraction {
     /// A ray leaving this point in direction `d`, offset against self-intersection.
     #[inline]
     pub fn spawn_ray(&self, d: Vec3) -> Ray {
-        Ray::spawn(self.p, self.n, d)
+        // `n` is a unit normal.
+        Ray::spawn_unit(self.p, self.n, d)
     }
 
     /// A shadow ray from this point to `target`, stopping short of it.

@@ -288,8 +288,10 @@ impl Scene {
     /// The closest hit's full interaction.
     #[inline(always)]
     pub fn interact(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfaceInteraction> {
-        self.intersect(ray, stats)
-            .map(|h| self.geometry.interaction(ray, &h))
+        // No `map`: its closure can become a function of its own, which returns the
+        // interaction through memory.
+        let h = self.intersect(ray, stats)?;
+        Some(self.geometry.interaction(ray, &h))
     }
 
     /// The material of an interaction.

@@ -53,7 +53,8 @@ pub(crate) fn shadowed(
 ) -> bool {
     let ray = match target {
         Target::Point(p) => si.spawn_ray_to(p),
-        Target::Surface(p, n) => Ray::spawn_between(si.p, si.n, p, n),
+        // Both normals are unit normals (of an interaction and of a light's surface).
+        Target::Surface(p, n) => Ray::spawn_between_unit(si.p, si.n, p, n),
         Target::Infinite => si.spawn_ray(wi),
     };
     scene.occluded(&ray, stats)

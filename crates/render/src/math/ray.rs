@@ -57,17 +57,40 @@ impl Ray {
         }
     }
 
+    /// [`Ray::spawn`] for a unit normal `n` (not normalised again).
+    #[inline]
+    pub fn spawn_unit(p: Point3, n: Normal3, d: Vec3) -> Self {
+        Self::new(offset_unit(p, n, d), d)
+    }
+
     /// Like [`Ray::spawn_to`], but with both ends on surfaces: the target is offset too.
     #[inline]
     pub fn spawn_between(p: Point3, n: Normal3, target: Point3, n_target: Normal3) -> Self {
-        let o = offset_ray_origin(p, n, target - p);
-        let t = offset_ray_origin(target, n_target, o - target);
+        Self::spawn_between_unit(p, unit(n), target, unit(n_target))
+    }
+
+    /// [`Ray::spawn_between`] for unit normals `n` and `n_target` (not normalised again).
+    #[inline]
+    pub fn spawn_between_unit(p: Point3, n: Normal3, target: Point3, n_target: Normal3) -> Self {
+        let o = offset_unit(p, n, target - p);
+        let t = offset_unit(target, n_target, o - target);
         Self {
             o,
             d: t - o,
             tmin: 0.0,
             tmax: 1.0 - SHADOW_EPSILON,
         }
+    }
+}
+
+/// `n` normalised (a zero normal stays zero).
+#[inline(always)]
+fn unit(n: Normal3) -> Normal3 {
+    let len = n.to_vec().norm();
+    if len > 0.0 {
+        n / len
+    } else {
+        n
     }
 }
 
@@ -82,11 +105,15 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 /// intersection routine of candela, which recompute hit points in a shape's own frame.
 #[inline]
 pub fn offset_ray_origin(p: Point3, n: Normal3, w: Vec3) -> Point3 {
+    offset_unit(p, unit(n), w)
+}
+
+/// [`offset_ray_origin`] for a unit normal `n`.
+#[inline(always)]
+fn offset_unit(p: Point3, n: Normal3, w: Vec3) -> Point3 {
     const ORIGIN: f32 = 1.0 / 32.0;
     const FLOAT_SCALE: f32 = 1.0 / 65536.0;
     const INT_SCALE: f32 = 256.0;
-    let len = n.to_vec().norm();
-    let n = if len > 0.0 { n / len } else { n };
     let n = if n.dot_vec(w) < 0.0 { -n } else { n };
     let off = |p: f32, n: f32| -> f32 {
         let of_i = (INT_SCALE * n) as i32;
