@@ -16,7 +16,7 @@ fn frame(b: Bencher, loaded: candela_scene::LoadedScene, integrator: &str, size:
         width: size,
         height: size,
         spp,
-        seed: 0,
+        ..Default::default()
     };
     let kind = IntegratorKind::from_name(integrator).unwrap();
     let s = IntegratorSettings {

@@ -43,6 +43,9 @@ pub struct RenderArgs {
     /// Samples per pixel (default 1, or the XML's sample_count): 1 goes through the pixel centre.
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP))]
     pub spp: Option<u32>,
+    /// How the samples of a pixel are placed: sobol (default), stratified, independent.
+    #[arg(long, value_name = "NAME")]
+    pub sampler: Option<String>,
     /// The integrator.
     #[arg(long, value_name = "NAME")]
     pub integrator: Option<String>,

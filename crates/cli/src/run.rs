@@ -9,6 +9,7 @@ use candela_render::radiosity::{
     CacheStatus, FormFactorMethod, RadiosityOptions, RadiosityOutbox, SolverKind,
 };
 use candela_render::render::{render as render_image, RenderSettings};
+use candela_render::sampling::SamplerKind;
 use candela_scene::{LoadOptions, LoadedScene};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -52,8 +53,23 @@ fn outputs(args: &RenderArgs, default: &Path) -> Result<Vec<PathBuf>> {
     Ok(outs)
 }
 
-/// Everything the scene loaders need from the command line.
+/// The `--sampler` option.
+fn sampler_kind(args: &RenderArgs) -> Result<SamplerKind> {
+    match &args.sampler {
+        None => Ok(SamplerKind::default()),
+        Some(name) => SamplerKind::from_name(name).with_context(|| {
+            format!(
+                "--sampler '{name}': unknown sampler (expected one of: {})",
+                SamplerKind::NAMES.join(", ")
+            )
+        }),
+    }
+}
+
+/// Everything the scene loaders need from the command line (checking the other options that
+/// need no scene first, so that a bad one fails before any work).
 fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
+    sampler_kind(args)?;
     let accel = match &args.accel {
         None => AccelKind::default(),
         Some(name) => {
@@ -235,6 +251,7 @@ fn render_and_write(
         height: args.height.or(hints.height).unwrap_or(480) as usize,
         spp: args.spp.or(hints.spp).unwrap_or(1),
         seed: args.seed,
+        sampler: sampler_kind(args)?,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)

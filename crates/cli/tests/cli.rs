@@ -115,6 +115,7 @@ fn option_errors_name_the_option() {
             "--integrator",
         ),
         (vec!["demo", "--accel", "magic", "-o", o], "--accel"),
+        (vec!["demo", "--sampler", "magic", "-o", o], "--sampler"),
         (vec!["demo", "-o", "picture.bmp"], "--output"),
         (vec!["demo", "--threads", "0", "-o", o], "--threads"),
         (vec!["demo", "--gamma", "-1", "-o", o], "--gamma"),
@@ -131,7 +132,7 @@ fn option_errors_name_the_option() {
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
     let dir = scratch("threads");
-    let run = |threads: &str, name: &str| {
+    let run = |threads: &str, sampler: &str, name: &str| {
         let out = dir.join(name);
         let o = candela(&[
             "demo",
@@ -143,6 +144,8 @@ fn images_do_not_depend_on_the_thread_count() {
             "4",
             "--seed",
             "5",
+            "--sampler",
+            sampler,
             "--threads",
             threads,
             "-q",
@@ -152,9 +155,11 @@ fn images_do_not_depend_on_the_thread_count() {
         assert!(o.status.success(), "{}", stderr(&o));
         std::fs::read(out).unwrap()
     };
-    let a = run("1", "one.pfm");
-    let b = run("3", "three.pfm");
-    assert_eq!(a, b);
+    for sampler in ["sobol", "stratified", "independent"] {
+        let a = run("1", sampler, "one.pfm");
+        let b = run("3", sampler, "three.pfm");
+        assert_eq!(a, b, "{sampler}");
+    }
 }
 
 /// `convert` applies the course's tone mapping: a uniform grey PFM of value 1 with a = 0.18,

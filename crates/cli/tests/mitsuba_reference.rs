@@ -35,6 +35,7 @@ fn renders(spp: u32, seeds: std::ops::Range<u64>) -> Vec<Image> {
                 height: SIZE,
                 spp,
                 seed,
+                ..Default::default()
             };
             render(&loaded.scene, integ.as_ref(), &rs, &|_| {}).image
         })

@@ -27,6 +27,7 @@ fn render_example(
         height: 24,
         spp,
         seed,
+        ..Default::default()
     };
     render(&loaded.scene, integ.as_ref(), &rs, &|_| {}).image
 }

@@ -9,7 +9,7 @@
 use crate::color::Rgb;
 use crate::image::Image;
 use crate::integrator::Integrator;
-use crate::sampling::Sampler;
+use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::stats::RayStats;
 use rayon::prelude::*;
@@ -28,6 +28,8 @@ pub struct RenderSettings {
     pub spp: u32,
     /// The seed of every random sequence.
     pub seed: u64,
+    /// How the samples of a pixel are placed.
+    pub sampler: SamplerKind,
 }
 
 impl Default for RenderSettings {
@@ -37,6 +39,7 @@ impl Default for RenderSettings {
             height: 480,
             spp: 1,
             seed: 0,
+            sampler: SamplerKind::Sobol,
         }
     }
 }
@@ -101,8 +104,12 @@ fn render_pixel(
     stats: &mut RayStats,
 ) -> Rgb {
     let (w, h) = (settings.width as f32, settings.height as f32);
-    let mut sampler =
-        Sampler::for_pixel(settings.seed, (y * settings.width + x) as u64, settings.spp);
+    let mut sampler = Sampler::for_pixel_with(
+        settings.sampler,
+        settings.seed,
+        (y * settings.width + x) as u64,
+        settings.spp,
+    );
     let mut sum = [0f64; 3];
     for i in 0..settings.spp {
         let [sx, sy] = sampler.pixel_sample(i);
@@ -173,33 +180,40 @@ mod tests {
     #[test]
     fn the_image_does_not_depend_on_the_thread_count() {
         let s = scene();
-        let settings = RenderSettings {
-            width: 37,
-            height: 21,
-            spp: 3,
-            seed: 9,
-        };
-        let run = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| render(&s, &Noise, &settings, &|_| {}))
-        };
-        let a = run(1);
-        let b = run(4);
-        assert_eq!(a.image, b.image);
-        assert_eq!(a.stats, b.stats);
-        let other = render(
-            &s,
-            &Noise,
-            &RenderSettings {
-                seed: 10,
-                ..settings
-            },
-            &|_| {},
-        );
-        assert_ne!(a.image, other.image);
+        for sampler in [
+            SamplerKind::Sobol,
+            SamplerKind::Stratified,
+            SamplerKind::Independent,
+        ] {
+            let settings = RenderSettings {
+                width: 37,
+                height: 21,
+                spp: 3,
+                seed: 9,
+                sampler,
+            };
+            let run = |threads| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| render(&s, &Noise, &settings, &|_| {}))
+            };
+            let a = run(1);
+            let b = run(4);
+            assert_eq!(a.image, b.image);
+            assert_eq!(a.stats, b.stats);
+            let other = render(
+                &s,
+                &Noise,
+                &RenderSettings {
+                    seed: 10,
+                    ..settings
+                },
+                &|_| {},
+            );
+            assert_ne!(a.image, other.image);
+        }
     }
 
     #[test]
@@ -209,7 +223,7 @@ mod tests {
             width: 4,
             height: 2,
             spp: 1,
-            seed: 0,
+            ..Default::default()
         };
         let out = render(&s, &Noise, &settings, &|_| {});
         // Row 0 is the top: v = 1 − 0.5/2 = 0.75, so the ray points up (z > 0).
@@ -226,7 +240,7 @@ mod tests {
             width: 8,
             height: 4,
             spp: 2,
-            seed: 0,
+            ..Default::default()
         };
         let out = render(&s, &Poison, &settings, &|_| {});
         assert!(out.image.pixels().iter().all(|p| p.is_finite()));
@@ -245,7 +259,7 @@ mod tests {
             width: 50,
             height: 33,
             spp: 1,
-            seed: 0,
+            ..Default::default()
         };
         render(&s, &Noise, &settings, &|n| {
             done.fetch_add(n, Ordering::Relaxed);

@@ -18,6 +18,7 @@ fn settings(spp: u32) -> RenderSettings {
         height: 12,
         spp,
         seed: 7,
+        ..Default::default()
     }
 }
 

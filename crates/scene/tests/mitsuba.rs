@@ -1063,7 +1063,7 @@ fn render_cornell(integrator: &dyn Integrator, n: usize) -> Image {
         width: n,
         height: n,
         spp: 1,
-        seed: 0,
+        ..Default::default()
     };
     render(&l.scene, integrator, &settings, &|_| {}).image
 }

@@ -8,16 +8,50 @@
 //! (the van der Corput and second Sobol dimensions, a (0,2)-sequence) of a shuffled index, with
 //! a nested uniform scramble seeded by the pixel and the pair. The samples of a pixel are thus
 //! stratified in every pair of dimensions a path consumes (pixel position, light sample, BSDF
-//! sample, …), which lowers the error at equal sample count. Free-standing samplers (tests,
-//! preprocessing) are plain PCG32 streams.
+//! sample, …), which lowers the error at equal sample count ([`SamplerKind::Sobol`], the
+//! default). [`SamplerKind::Stratified`] is the classic jittered sampler: every pair of
+//! dimensions is a correlated multi-jittered pattern (Kensler 2013; a jittered grid whose
+//! projections are also stratified) and every single dimension is cut into `spp` strata, each
+//! dimension with its own shuffle of the strata. [`SamplerKind::Independent`] draws every number
+//! from the pixel's PCG32 stream. Free-standing samplers (tests, preprocessing) are plain PCG32
+//! streams.
 
 use super::pcg::{hash2, Pcg32};
+
+/// How the samples of a pixel are placed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol pairs (stratified in every pair of dimensions).
+    #[default]
+    Sobol,
+    /// Jittered strata: correlated multi-jittered pairs, `spp` strata per single dimension.
+    Stratified,
+    /// Independent uniform numbers.
+    Independent,
+}
+
+impl SamplerKind {
+    /// The names accepted by [`SamplerKind::from_name`].
+    pub const NAMES: [&'static str; 3] = ["sobol", "stratified", "independent"];
+
+    /// The sampler called `name`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "sobol" => Some(Self::Sobol),
+            "stratified" => Some(Self::Stratified),
+            "independent" => Some(Self::Independent),
+            _ => None,
+        }
+    }
+}
 
 /// The sample source handed to integrators: uniform numbers in `[0, 1)`.
 #[derive(Clone, Debug)]
 pub struct Sampler {
     rng: Pcg32,
     spp: u32,
+    /// The pixel's pattern seed for jittered strata; `None` otherwise.
+    strata: Option<u32>,
     /// The pixel's scrambling seed; `None` for an independent sampler.
     sobol: Option<u32>,
     /// The sample being drawn, and its index with the bits reversed.
@@ -61,11 +95,19 @@ impl Sampler {
     /// The sampler of pixel number `pixel` (row-major index) for an image rendered with `seed`
     /// and `spp` samples per pixel.
     pub fn for_pixel(seed: u64, pixel: u64, spp: u32) -> Self {
+        Self::for_pixel_with(SamplerKind::Sobol, seed, pixel, spp)
+    }
+
+    /// The sampler of kind `kind` for pixel number `pixel` (row-major index) of an image
+    /// rendered with `seed` and `spp` samples per pixel.
+    pub fn for_pixel_with(kind: SamplerKind, seed: u64, pixel: u64, spp: u32) -> Self {
         let h = hash2(seed, pixel);
+        let pattern = (h >> 32) as u32 ^ h as u32;
         Self {
             rng: Pcg32::new(h, pixel),
             spp: spp.max(1),
-            sobol: Some((h >> 32) as u32 ^ h as u32),
+            strata: (kind == SamplerKind::Stratified).then_some(pattern),
+            sobol: (kind == SamplerKind::Sobol).then_some(pattern),
             index: 0,
             rindex: 0,
             dim: 0,
@@ -80,6 +122,7 @@ impl Sampler {
         Self {
             rng: Pcg32::new(hash2(seed, stream), stream),
             spp: 1,
+            strata: None,
             sobol: None,
             index: 0,
             rindex: 0,
@@ -136,7 +179,17 @@ impl Sampler {
                 let r = laine_karras(self.rindex, s.shuffle);
                 to_unit(laine_karras(r.reverse_bits(), s.x).reverse_bits())
             }
-            None => self.rng.next_f32(),
+            None => match self.strata {
+                Some(pattern) => {
+                    let p = hash_u32(pattern, self.dim);
+                    self.dim += 1;
+                    let n = self.spp;
+                    let stratum = permute(self.index % n, n, p);
+                    ((stratum as f32 + randfloat(self.index, p ^ 0x2c1b_3c6d)) / n as f32)
+                        .min(ONE_MINUS_EPSILON)
+                }
+                None => self.rng.next_f32(),
+            },
         }
     }
 
@@ -157,11 +210,18 @@ impl Sampler {
                 let xy = ((x as u64) << 32 | y as u64).reverse_bits();
                 [to_unit(xy as u32), to_unit((xy >> 32) as u32)]
             }
-            None => {
-                let a = self.rng.next_f32();
-                let b = self.rng.next_f32();
-                [a, b]
-            }
+            None => match self.strata {
+                Some(pattern) => {
+                    let p = hash_u32(pattern, self.dim);
+                    self.dim += 2;
+                    cmj(self.index % self.spp, self.spp, p)
+                }
+                None => {
+                    let a = self.rng.next_f32();
+                    let b = self.rng.next_f32();
+                    [a, b]
+                }
+            },
         }
     }
 
@@ -170,6 +230,7 @@ impl Sampler {
     pub fn next_index(&mut self, n: u32) -> u32 {
         match self.sobol {
             Some(_) => ((self.next_1d() * n as f32) as u32).min(n - 1),
+            None if self.strata.is_some() => ((self.next_1d() * n as f32) as u32).min(n - 1),
             None => self.rng.next_bounded(n),
         }
     }
@@ -392,6 +453,104 @@ mod tests {
                 assert!(xs.iter().all(|&b| b), "n = {n}: x strata");
             }
         }
+    }
+
+    #[test]
+    fn stratified_dimensions_fill_every_stratum_once() {
+        for n in [4u32, 9, 16, 7, 10] {
+            let mut s = Sampler::for_pixel_with(SamplerKind::Stratified, 5, 123, n);
+            // Per sample: the pixel pair, two single dimensions, another pair.
+            let pts: Vec<([f32; 2], f32, f32, [f32; 2])> = (0..n)
+                .map(|i| {
+                    let p = s.pixel_sample(i);
+                    (p, s.next_1d(), s.next_1d(), s.next_2d())
+                })
+                .collect();
+            let once = |values: Vec<f32>| {
+                let mut seen = vec![false; n as usize];
+                for v in values {
+                    assert!((0.0..1.0).contains(&v));
+                    let c = (v * n as f32) as usize;
+                    assert!(!seen[c], "n = {n}: stratum {c} twice");
+                    seen[c] = true;
+                }
+            };
+            once(pts.iter().map(|p| p.1).collect());
+            once(pts.iter().map(|p| p.2).collect());
+            for pair in [0, 1] {
+                let xy: Vec<[f32; 2]> = pts.iter().map(|p| [p.0, p.3][pair]).collect();
+                // Rows of a multi-jittered pattern: each of the n horizontal strips once.
+                once(xy.iter().map(|p| p[1]).collect());
+                // A square count is a jittered m × m grid.
+                let m = (n as f32).sqrt() as u32;
+                if m * m == n {
+                    let mut seen = vec![false; n as usize];
+                    for [x, y] in &xy {
+                        let c = (x * m as f32) as usize + m as usize * (y * m as f32) as usize;
+                        assert!(!seen[c], "n = {n}: cell {c} twice");
+                        seen[c] = true;
+                    }
+                }
+            }
+            // The two single dimensions are shuffled differently.
+            let a: Vec<u32> = pts.iter().map(|p| (p.1 * n as f32) as u32).collect();
+            let b: Vec<u32> = pts.iter().map(|p| (p.2 * n as f32) as u32).collect();
+            if n >= 9 {
+                assert_ne!(a, b);
+            }
+        }
+    }
+
+    /// Every sampler estimates ∫∫ f over the unit square without bias; the stratified ones
+    /// with a smaller error than independent numbers (f smooth, 16 samples per pixel).
+    #[test]
+    fn every_sampler_integrates_without_bias_and_strata_lower_the_error() {
+        let f = |[x, y]: [f32; 2], z: f32| {
+            let (x, y, z) = (x as f64, y as f64, z as f64);
+            x * x + (3.0 * y).sin() + x * y * z
+        };
+        // ∫x² = 1/3, ∫sin 3y = (1 − cos 3)/3, ∫xyz = 1/8.
+        let exact = 1.0 / 3.0 + (1.0 - 3f64.cos()) / 3.0 + 0.125;
+        let (pixels, spp) = (4000u64, 16u32);
+        let mut rmse = Vec::new();
+        for kind in [
+            SamplerKind::Independent,
+            SamplerKind::Stratified,
+            SamplerKind::Sobol,
+        ] {
+            let (mut sum, mut sq) = (0.0f64, 0.0f64);
+            for px in 0..pixels {
+                let mut s = Sampler::for_pixel_with(kind, 11, px, spp);
+                let est = (0..spp)
+                    .map(|i| {
+                        let p = s.pixel_sample(i);
+                        f(p, s.next_1d())
+                    })
+                    .sum::<f64>()
+                    / spp as f64;
+                sum += est;
+                sq += (est - exact) * (est - exact);
+            }
+            let mean = sum / pixels as f64;
+            let e = (sq / pixels as f64).sqrt();
+            // The mean of 4000 pixel estimates: 5 standard errors at most.
+            assert!(
+                (mean - exact).abs() < 5.0 * e / (pixels as f64).sqrt(),
+                "{kind:?}: {mean} vs {exact}"
+            );
+            rmse.push(e);
+        }
+        assert!(rmse[1] < 0.7 * rmse[0], "{rmse:?}");
+        assert!(rmse[2] < 0.7 * rmse[0], "{rmse:?}");
+    }
+
+    #[test]
+    fn sampler_names() {
+        for name in SamplerKind::NAMES {
+            assert!(SamplerKind::from_name(name).is_some());
+        }
+        assert_eq!(SamplerKind::from_name("halton"), None);
+        assert_eq!(SamplerKind::default(), SamplerKind::Sobol);
     }
 
     #[test]

@@ -239,6 +239,7 @@ pub fn image(scene: &Scene, integrator: &dyn Integrator, res: usize, spp: u32) -
         height: res,
         spp,
         seed: 7,
+        ..Default::default()
     };
     render(scene, integrator, &settings, &|_| {}).image
 }
