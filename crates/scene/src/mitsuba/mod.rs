@@ -22,8 +22,6 @@
 //! absence would change the image, are errors at their position.
 //!
 //! Checked against Mitsuba 3.9.1 (`scalar_rgb`) renders of the same files. Known differences:
-//! - `spot`: candela's fall-off between `beam_width` and `cutoff_angle` is a smooth step,
-//!   Mitsuba's is linear in the angle (a warning says so);
 //! - `envmap`: Mitsuba puts the centres of the first and last rows on the poles, candela's
 //!   bilinear lookup half a texel inside (at most half a texel of vertical shift);
 //! - `bitmap`: lookups repeat in u but clamp in v (Mitsuba repeats both: it matters only within
@@ -670,12 +668,6 @@ impl<'t> Loader<'t> {
                 } else {
                     let cutoff = p.number_in("cutoff_angle", 20.0, (0.0, 180.0))?;
                     let beam = p.number_in("beam_width", cutoff * 0.75, (0.0, cutoff))?;
-                    if beam < cutoff {
-                        self.warn(
-                            e.pos,
-                            "spot: candela's transition from beam_width to cutoff_angle is a smooth step, Mitsuba's is linear in the angle",
-                        );
-                    }
                     if p.has("texture") {
                         return Err(p.error(p.pos("texture"), "spot lights with a texture are not supported"));
                     }
