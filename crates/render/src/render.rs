@@ -71,9 +71,19 @@ pub fn render(
             let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
             let mut stats = RayStats::default();
             let mut pixels = Vec::with_capacity((x1 - x0) * (y1 - y0));
+            // One sampler per tile, reset for every pixel (its tables are large).
+            let mut sampler = Sampler::new(0, 0);
             for y in y0..y1 {
                 for x in x0..x1 {
-                    pixels.push(render_pixel(scene, integrator, settings, x, y, &mut stats));
+                    pixels.push(render_pixel(
+                        scene,
+                        integrator,
+                        settings,
+                        x,
+                        y,
+                        &mut sampler,
+                        &mut stats,
+                    ));
                 }
             }
             progress(pixels.len() as u64);
@@ -101,10 +111,11 @@ fn render_pixel(
     settings: &RenderSettings,
     x: usize,
     y: usize,
+    sampler: &mut Sampler,
     stats: &mut RayStats,
 ) -> Rgb {
     let (w, h) = (settings.width as f32, settings.height as f32);
-    let mut sampler = Sampler::for_pixel_with(
+    sampler.reset_for_pixel(
         settings.sampler,
         settings.seed,
         (y * settings.width + x) as u64,
@@ -116,7 +127,7 @@ fn render_pixel(
         let u = (x as f32 + sx) / w;
         let v = 1.0 - (y as f32 + sy) / h;
         let ray = scene.camera.ray(u, v);
-        let l = integrator.radiance(scene, &ray, &mut sampler, stats);
+        let l = integrator.radiance(scene, &ray, sampler, stats);
         stats.samples += 1;
         if l.is_finite() {
             sum[0] += l.r as f64;

@@ -27,7 +27,7 @@ mod grid;
 mod kdtree;
 mod list;
 mod octree;
-mod simd;
+pub(crate) mod simd;
 
 pub use bvh::{Bvh, BvhNode};
 #[cfg(feature = "embree")]

@@ -65,7 +65,22 @@ pub struct Sampler {
     seeds: [DimSeeds; CACHED_DIMS],
     /// Bit `d` set when `seeds[d]` holds the seeds of dimension `d`.
     cached: u64,
+    /// The first sample of the current chunk of [`CHUNK`] samples (see [`Batch`]).
+    chunk: u32,
+    /// Bit `d` set when `batch[d]` holds dimension `d` of the chunk's samples from
+    /// `batch_from[d]` on.
+    batched: u32,
+    batch_from: [u8; BATCH_DIMS],
+    /// The pairs of the first [`BATCH_DIMS`] dimensions of the chunk's samples, as
+    /// [`Sampler::next_2d`] returns them (the first of a pair is [`Sampler::next_1d`]'s number).
+    batch: [[[f32; 2]; CHUNK]; BATCH_DIMS],
 }
+
+/// Samples whose first dimensions a Sobol pixel sampler computes together.
+const CHUNK: usize = 64;
+
+/// Dimensions a Sobol pixel sampler computes a chunk at a time (at most 32).
+const BATCH_DIMS: usize = 32;
 
 /// Dimensions whose seeds a pixel sampler keeps.
 const CACHED_DIMS: usize = 64;
@@ -101,19 +116,26 @@ impl Sampler {
     /// The sampler of kind `kind` for pixel number `pixel` (row-major index) of an image
     /// rendered with `seed` and `spp` samples per pixel.
     pub fn for_pixel_with(kind: SamplerKind, seed: u64, pixel: u64, spp: u32) -> Self {
+        let mut s = Self::new(0, 0);
+        s.reset_for_pixel(kind, seed, pixel, spp);
+        s
+    }
+
+    /// Turns this sampler into [`Sampler::for_pixel_with`]`(kind, seed, pixel, spp)`, reusing
+    /// its storage (cheaper than building a new one: the tables are not cleared).
+    pub fn reset_for_pixel(&mut self, kind: SamplerKind, seed: u64, pixel: u64, spp: u32) {
         let h = hash2(seed, pixel);
         let pattern = (h >> 32) as u32 ^ h as u32;
-        Self {
-            rng: Pcg32::new(h, pixel),
-            spp: spp.max(1),
-            strata: (kind == SamplerKind::Stratified).then_some(pattern),
-            sobol: (kind == SamplerKind::Sobol).then_some(pattern),
-            index: 0,
-            rindex: 0,
-            dim: 0,
-            seeds: [DimSeeds::default(); CACHED_DIMS],
-            cached: 0,
-        }
+        self.rng = Pcg32::new(h, pixel);
+        self.spp = spp.max(1);
+        self.strata = (kind == SamplerKind::Stratified).then_some(pattern);
+        self.sobol = (kind == SamplerKind::Sobol).then_some(pattern);
+        self.index = 0;
+        self.rindex = 0;
+        self.dim = 0;
+        self.cached = 0;
+        self.chunk = 0;
+        self.batched = 0;
     }
 
     /// A free-standing independent sampler (tests, preprocessing) seeded by `seed` on stream
@@ -129,6 +151,10 @@ impl Sampler {
             dim: 0,
             seeds: [DimSeeds::default(); CACHED_DIMS],
             cached: 0,
+            chunk: 0,
+            batched: 0,
+            batch_from: [0; BATCH_DIMS],
+            batch: [[[0.0; 2]; CHUNK]; BATCH_DIMS],
         }
     }
 
@@ -138,6 +164,11 @@ impl Sampler {
         self.index = index;
         self.rindex = index.reverse_bits();
         self.dim = 0;
+        let chunk = index & !(CHUNK as u32 - 1);
+        if chunk != self.chunk {
+            self.chunk = chunk;
+            self.batched = 0;
+        }
     }
 
     /// The position of sample `index` inside the pixel, in `[0,1)²`: the pixel centre when the
@@ -167,11 +198,48 @@ impl Sampler {
         }
     }
 
+    /// The pair of dimension `self.dim` of the current sample (of a Sobol sampler with pixel
+    /// seed `seed`) from the chunk's table, which is filled for this dimension from the current
+    /// sample on the first time the chunk reaches it; `None` when the dimension is not
+    /// tabulated, or (samples drawn out of order) was tabulated from a later sample.
+    #[inline(always)]
+    fn batched(&mut self, seed: u32) -> Option<[f32; 2]> {
+        let d = self.dim as usize;
+        if d >= BATCH_DIMS {
+            return None;
+        }
+        let j = self.index.wrapping_sub(self.chunk) as usize;
+        if self.batched & (1 << d) == 0 {
+            self.fill(seed, d, j);
+        } else if j < self.batch_from[d] as usize {
+            return None;
+        }
+        Some(self.batch[d][j])
+    }
+
+    /// Tabulates dimension `d` of the chunk's samples from sample `j` of the chunk on.
+    #[inline(never)]
+    fn fill(&mut self, seed: u32, d: usize, j: usize) {
+        let s = self.dim_seeds(seed, d as u32);
+        let n = (self.spp.saturating_sub(self.chunk) as usize).clamp(j + 1, CHUNK);
+        self.batched |= 1 << d;
+        self.batch_from[d] = j as u8;
+        crate::accel::simd::run(Batch {
+            out: &mut self.batch[d][j..n],
+            first: self.chunk + j as u32,
+            seeds: s,
+        });
+    }
+
     /// The next uniform number.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
         match self.sobol {
             Some(seed) => {
+                if let Some(p) = self.batched(seed) {
+                    self.dim += 1;
+                    return p[0];
+                }
                 let s = self.dim_seeds(seed, self.dim);
                 self.dim += 1;
                 // With R the bit reversal and i = R(LK(R(index))) the shuffled index, the van
@@ -198,6 +266,10 @@ impl Sampler {
     pub fn next_2d(&mut self) -> [f32; 2] {
         match self.sobol {
             Some(seed) => {
+                if let Some(p) = self.batched(seed) {
+                    self.dim += 2;
+                    return p;
+                }
                 let s = self.dim_seeds(seed, self.dim);
                 self.dim += 2;
                 // The shuffled index is i = R(r) with r = LK(R(index)) (R: bit reversal). The
@@ -234,6 +306,50 @@ impl Sampler {
             None => self.rng.next_bounded(n),
         }
     }
+}
+
+/// The pairs of one dimension for consecutive samples, as a kernel for
+/// [`crate::accel::simd::run`]: the same numbers as [`Sampler::next_2d`] computes one at a
+/// time, but with independent samples side by side (vectorised), and off the path's
+/// critical chain.
+struct Batch<'a> {
+    out: &'a mut [[f32; 2]],
+    /// The sample index of `out[0]`.
+    first: u32,
+    seeds: DimSeeds,
+}
+
+impl crate::accel::simd::Kernel for Batch<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<I: crate::accel::simd::Isa>(self, _: I) {
+        let s = self.seeds;
+        for (k, p) in self.out.iter_mut().enumerate() {
+            let index = self.first.wrapping_add(k as u32);
+            let r = laine_karras(index.reverse_bits(), s.shuffle);
+            let rr = r.reverse_bits();
+            let x = laine_karras(rr, s.x).reverse_bits();
+            let y = laine_karras(reversed_sobol_dim1(rr), s.y).reverse_bits();
+            // Below 2^24, the signed conversion (vectorisable) is the unsigned one.
+            *p = [
+                ((x >> 8) as i32) as f32 * (1.0 / 16_777_216.0),
+                ((y >> 8) as i32) as f32 * (1.0 / 16_777_216.0),
+            ];
+        }
+    }
+}
+
+/// The second Sobol dimension of index `i`, bit-reversed: R(sobol₁(i)) is the superset sum
+/// Z(i) (by Lucas' theorem, bit 31 − m of sobol₁(i) is the parity of the set bits k ⊇ m of
+/// i), so G(r) = Z(R(r)). ALU operations only, unlike the tables of [`sobol_dim1_reversed`].
+#[inline(always)]
+fn reversed_sobol_dim1(mut x: u32) -> u32 {
+    x ^= (x & 0xaaaa_aaaa) >> 1;
+    x ^= (x & 0xcccc_cccc) >> 2;
+    x ^= (x & 0xf0f0_f0f0) >> 4;
+    x ^= (x & 0xff00_ff00) >> 8;
+    x ^ (x & 0xffff_0000) >> 16
 }
 
 /// G = R∘sobol₁∘R, the second Sobol dimension conjugated by bit reversal: linear over GF(2),
@@ -403,6 +519,62 @@ mod tests {
                         seen[c as usize] = true;
                     }
                 }
+            }
+        }
+    }
+
+    /// The ALU form of the reversed second Sobol dimension is the tables' (both are linear over
+    /// GF(2), so the 32 unit vectors decide).
+    #[test]
+    fn reversed_sobol_dim1_matches_the_tables() {
+        for b in 0..32 {
+            let r = 1u32 << b;
+            assert_eq!(
+                reversed_sobol_dim1(r.reverse_bits()),
+                sobol_dim1_reversed(r)
+            );
+        }
+    }
+
+    /// The chunk tables give exactly the numbers computed one at a time, whatever the order of
+    /// the samples, the sample count (chunks of 64, partial chunks) and the 1D/2D mix.
+    #[test]
+    fn tabulated_dimensions_match_the_direct_computation() {
+        // The direct computation: dimension `dim` of sample `index`.
+        let direct = |seed: u32, index: u32, dim: u32| {
+            let s = DimSeeds::new(seed, dim);
+            let r = laine_karras(index.reverse_bits(), s.shuffle);
+            let x = laine_karras(r.reverse_bits(), s.x).reverse_bits();
+            let y = laine_karras(sobol_dim1_reversed(r), s.y).reverse_bits();
+            [to_unit(x), to_unit(y)]
+        };
+        for spp in [1u32, 5, 64, 100, 200] {
+            let mut s = Sampler::for_pixel(7, 1234, spp);
+            let seed = s.sobol.expect("sobol");
+            let mut order: Vec<u32> = (0..spp).collect();
+            // Forward, then a scrambled order (earlier samples after later ones).
+            order.extend((0..spp).map(|i| (i * 37 + 11) % spp));
+            for (k, &i) in order.iter().enumerate() {
+                s.start_sample(i);
+                let mut dim = 0;
+                while dim < BATCH_DIMS as u32 + 6 {
+                    if (k + dim as usize).is_multiple_of(3) {
+                        assert_eq!(s.next_1d(), direct(seed, i, dim)[0], "{spp} {i} {dim}");
+                        dim += 1;
+                    } else {
+                        assert_eq!(s.next_2d(), direct(seed, i, dim), "{spp} {i} {dim}");
+                        dim += 2;
+                    }
+                }
+            }
+            // A reset sampler gives the numbers of a new one.
+            let mut t = Sampler::for_pixel(7, 99, spp);
+            s.reset_for_pixel(SamplerKind::Sobol, 7, 99, spp);
+            for i in 0..spp.min(3) {
+                s.start_sample(i);
+                t.start_sample(i);
+                assert_eq!(s.next_2d(), t.next_2d());
+                assert_eq!(s.next_1d(), t.next_1d());
             }
         }
     }
