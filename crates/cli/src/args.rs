@@ -31,7 +31,7 @@ pub struct SceneArgs {
 
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Output file, repeatable; the format follows the extension (.png, .pfm, .exr).
+    /// Output file, repeatable; the format follows the extension (.png, .pfm, .exr, .hdr).
     #[arg(short = 'o', long = "output", value_name = "FILE")]
     pub outputs: Vec<PathBuf>,
     /// Image width in pixels (default 640, or the XML film's).
@@ -108,9 +108,9 @@ pub struct ToneArgs {
 
 #[derive(Args, Debug)]
 pub struct ConvertArgs {
-    /// The input image (.pfm, .exr, .png).
+    /// The input image (.pfm, .exr, .hdr, .png).
     pub input: PathBuf,
-    /// The output image (.pfm, .exr, .png).
+    /// The output image (.pfm, .exr, .hdr, .png).
     pub output: PathBuf,
     #[command(flatten)]
     pub tone: ToneArgs,

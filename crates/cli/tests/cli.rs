@@ -11,7 +11,10 @@ use common::{candela, repo, scratch, stderr};
 fn every_example_renders() {
     let dir = scratch("examples");
     let mut n = 0;
-    for entry in std::fs::read_dir(repo().join("examples")).unwrap() {
+    let entries = ["examples", "examples/mitsuba"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(repo().join(d)).unwrap());
+    for entry in entries {
         let path = entry.unwrap().path();
         let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
         if ext != "scene" && ext != "xml" {

@@ -80,6 +80,14 @@ pub enum ImageError {
         /// The codec's error.
         cause: image::ImageError,
     },
+    /// The `image` crate failed to decode or encode a Radiance HDR image.
+    #[error("cannot {action} Radiance HDR: {cause}")]
+    Hdr {
+        /// `"decode"` or `"encode"`.
+        action: &'static str,
+        /// The codec's error.
+        cause: image::ImageError,
+    },
     /// The `exr` crate failed to decode or encode an OpenEXR image.
     #[error("cannot {action} OpenEXR: {cause}")]
     Exr {
@@ -211,7 +219,7 @@ mod tests {
         };
         assert_eq!(
             e.to_string(),
-            "out/a.bmp: unsupported image file extension \".bmp\"; supported extensions are .pfm, .exr, .png"
+            "out/a.bmp: unsupported image file extension \".bmp\"; supported extensions are .pfm, .exr, .png, .hdr"
         );
         let e = ImageError::UnsupportedExtension {
             path: "a".into(),

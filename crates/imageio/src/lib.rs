@@ -1,7 +1,7 @@
-//! candela's image files: PFM, OpenEXR and PNG, plus the course's tone mapping.
+//! candela's image files: PFM, OpenEXR, Radiance HDR and PNG, plus the course's tone mapping.
 //!
-//! The format of a file is chosen by its extension, case-insensitively: `.pfm` and `.exr`
-//! hold linear HDR data, `.png` holds tone-mapped 8-bit sRGB-ish data (see [`ToneMap`]).
+//! The format of a file is chosen by its extension, case-insensitively: `.pfm`, `.exr` and
+//! `.hdr` hold linear HDR data, `.png` holds tone-mapped 8-bit sRGB-ish data (see [`ToneMap`]).
 //! [`read_image`] and [`write_image`] cover the common case; the per-format modules offer
 //! in-memory codecs.
 //!
@@ -12,6 +12,7 @@
 
 pub mod error;
 pub mod exr;
+pub mod hdr;
 pub mod pfm;
 pub mod png;
 pub mod tonemap;
@@ -43,11 +44,13 @@ pub enum Format {
     Exr,
     /// PNG: tone-mapped 8-bit RGB.
     Png,
+    /// Radiance HDR (RGBE): linear RGB with a shared 8-bit exponent.
+    Hdr,
 }
 
 impl Format {
     /// All formats, in the order they are listed to users.
-    pub const ALL: [Format; 3] = [Format::Pfm, Format::Exr, Format::Png];
+    pub const ALL: [Format; 4] = [Format::Pfm, Format::Exr, Format::Png, Format::Hdr];
 
     /// The file extension, lower-case and without the dot.
     pub fn extension(self) -> &'static str {
@@ -55,6 +58,7 @@ impl Format {
             Format::Pfm => "pfm",
             Format::Exr => "exr",
             Format::Png => "png",
+            Format::Hdr => "hdr",
         }
     }
 
@@ -77,6 +81,7 @@ impl Format {
             Format::Pfm => pfm::read_pfm(bytes),
             Format::Exr => exr::read_exr(bytes),
             Format::Png => png::read_png(bytes),
+            Format::Hdr => hdr::read_hdr(bytes),
         }
     }
 
@@ -86,6 +91,7 @@ impl Format {
             Format::Pfm => check_size(img.width(), img.height()).map(|()| pfm::write_pfm(img)),
             Format::Exr => exr::write_exr(img),
             Format::Png => png::write_png(img.width(), img.height(), &tonemap.apply(img)),
+            Format::Hdr => hdr::write_hdr(img),
         }
     }
 }

@@ -98,14 +98,18 @@ impl ImageTexture {
 pub enum Texture {
     /// A constant colour.
     Uniform(Rgb),
-    /// A checkerboard of `steps × steps` squares over the unit uv square.
+    /// A checkerboard: square (i, j) holds the point with ⌊u·steps_u + offset_u⌋ = i and
+    /// ⌊v·steps_v + offset_v⌋ = j (the course's `steps × steps` squares over the unit uv square
+    /// when both steps are `steps` and the offsets 0).
     Checkered {
         /// Colour of the squares whose indices have equal parity.
         c1: Rgb,
         /// Colour of the others.
         c2: Rgb,
-        /// Squares per unit of u and v.
-        steps: u32,
+        /// Squares per unit of u and of v.
+        steps: [f32; 2],
+        /// Shift of the pattern, in squares along u and v.
+        offset: [f32; 2],
     },
     /// An image mapped onto the uv square.
     Image(ImageTexture),
@@ -127,10 +131,14 @@ impl Texture {
     fn eval_varying(&self, uv: Point2) -> Rgb {
         match self {
             Texture::Uniform(c) => *c,
-            Texture::Checkered { c1, c2, steps } => {
-                let n = *steps as f32;
-                let iu = (uv.x * n).floor() as i64;
-                let iv = (uv.y * n).floor() as i64;
+            Texture::Checkered {
+                c1,
+                c2,
+                steps,
+                offset,
+            } => {
+                let iu = (uv.x * steps[0] + offset[0]).floor() as i64;
+                let iv = (uv.y * steps[1] + offset[1]).floor() as i64;
                 if iu.rem_euclid(2) == iv.rem_euclid(2) {
                     *c1
                 } else {
@@ -175,7 +183,12 @@ mod tests {
     fn checkered_follows_the_course() {
         let c1 = Rgb::new(1.0, 2.0, 3.0);
         let c2 = Rgb::new(10.0, 20.0, 30.0);
-        let t = Texture::Checkered { c1, c2, steps: 2 };
+        let t = Texture::Checkered {
+            c1,
+            c2,
+            steps: [2.0; 2],
+            offset: [0.0; 2],
+        };
         assert_eq!(t.eval(Point2::new(0.25, 0.25)), c1);
         assert_eq!(t.eval(Point2::new(0.75, 0.25)), c2);
         assert_eq!(t.eval(Point2::new(0.25, 0.75)), c2);

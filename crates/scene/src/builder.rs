@@ -90,7 +90,8 @@ impl Builder<'_> {
             } => Texture::Checkered {
                 c1: *color1,
                 c2: *color2,
-                steps: *steps,
+                steps: [*steps as f32; 2],
+                offset: [0.0; 2],
             },
             PigmentKind::Image(file) => {
                 let image = match self.images.get(&file.path) {

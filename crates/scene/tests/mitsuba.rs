@@ -683,6 +683,8 @@ fn textures() {
                <shape type="rectangle"><bsdf type="diffuse"><ref name="reflectance" id="t"/></bsdf></shape>
                <shape type="disk"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
                    <rgb name="color0" value="1"/><transform name="to_uv"><scale value="3"/></transform></texture></bsdf></shape>
+               <shape type="disk"><bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+                   <transform name="to_uv"><scale x="8" y="4"/><translate x="0.25"/></transform></texture></bsdf></shape>
                <shape type="cube"><bsdf type="diffuse"><ref name="reflectance" id="t"/></bsdf></shape>"#,
         ),
     );
@@ -712,8 +714,29 @@ fn textures() {
         Texture::Checkered {
             c1: Rgb::WHITE,
             c2: Rgb::splat(0.2),
-            steps: 6
+            steps: [6.0; 2],
+            offset: [0.0; 2],
         }
+    );
+    // Separate scales of u and v, then a shift: u' = 8u + 0.25, v' = 4v.
+    let Model::Diffuse { reflectance } = &l.scene.materials[o[2].props.material as usize].model
+    else {
+        panic!()
+    };
+    assert_eq!(
+        *reflectance,
+        Texture::Checkered {
+            c1: Rgb::splat(0.4),
+            c2: Rgb::splat(0.2),
+            steps: [16.0, 8.0],
+            offset: [0.5, 0.0],
+        }
+    );
+    assert_error_starts_with(
+        &scene(
+            r#"<texture type="checkerboard"><transform name="to_uv"><rotate z="1" angle="30"/></transform></texture>"#,
+        ),
+        "2:30: to_uv: only scalings and translations",
     );
     // A textured cube becomes Mitsuba's mesh (its per-face uv).
     assert_eq!(l.scene.geometry.meshes()[0].len(), 12);

@@ -248,7 +248,7 @@ impl<'t> Loader<'t> {
         }
         self.enter(e)?;
         let p = self.props(e)?;
-        let scale = self.uv_scale(&p)?;
+        let (scale, offset) = self.uv_transform(&p)?;
         let t = match e.kind() {
             "bitmap" => {
                 let (name, pos) = p
@@ -278,7 +278,7 @@ impl<'t> Loader<'t> {
                     filter,
                     wrap: [wrap; 2],
                     scale,
-                    offset: [0.0, 0.0],
+                    offset,
                 })
             }
             "checkerboard" => {
@@ -286,20 +286,13 @@ impl<'t> Loader<'t> {
                     self.color(&p, "color0", 0.4, false)?,
                     self.color(&p, "color1", 0.2, false)?,
                 );
-                // Mitsuba: color0 where frac(u) and frac(v) are on the same side of ½, i.e.
-                // candela's checkerboard of 2 squares per unit of (scaled) uv.
-                let steps = 2.0 * scale[0];
-                if scale[0] != scale[1] || steps.fract() != 0.0 || !(1.0..=65536.0).contains(&steps)
-                {
-                    return Err(p.error(
-                        p.pos("to_uv"),
-                        "checkerboard: to_uv must scale u and v by the same multiple of ½",
-                    ));
-                }
+                // Mitsuba: color0 where frac(u) and frac(v) of the transformed uv are on the
+                // same side of ½, i.e. candela's checkerboard of 2 squares per unit of it.
                 Texture::Checkered {
                     c1,
                     c2,
-                    steps: steps as u32,
+                    steps: scale.map(|s| 2.0 * s),
+                    offset: offset.map(|o| 2.0 * o),
                 }
             }
             other => {
@@ -315,19 +308,29 @@ impl<'t> Loader<'t> {
         Ok(t)
     }
 
-    /// The scaling of `to_uv` (which must be a pure scaling of u and v).
-    fn uv_scale(&self, p: &Props) -> Result<[f32; 2], SceneError> {
+    /// The scale and offset of `to_uv`, which must map u and v separately (scalings and
+    /// translations; no rotation or shear).
+    fn uv_transform(&self, p: &Props) -> Result<([f32; 2], [f32; 2]), SceneError> {
         let Some((m, pos)) = p.get::<super::math::M4>("to_uv")? else {
-            return Ok([1.0, 1.0]);
+            return Ok(([1.0, 1.0], [0.0, 0.0]));
         };
-        let off_diagonal = (0..3).any(|r| (0..4).any(|c| r != c && m.0[r][c] != 0.0));
-        if off_diagonal || !(m.0[0][0] > 0.0 && m.0[1][1] > 0.0) {
+        let m = m.0;
+        let (scale, offset) = (
+            [m[0][0] as f32, m[1][1] as f32],
+            [m[0][3] as f32, m[1][3] as f32],
+        );
+        let usable = |x: f32| x.is_finite() && x.abs() <= 1e6;
+        if m[0][1] != 0.0
+            || m[1][0] != 0.0
+            || scale.contains(&0.0)
+            || !scale.iter().chain(&offset).all(|&x| usable(x))
+        {
             return Err(p.error(
                 pos,
-                "to_uv: only positive scalings of u and v are supported",
+                "to_uv: only scalings and translations of u and v are supported",
             ));
         }
-        Ok([m.0[0][0] as f32, m.0[1][1] as f32])
+        Ok((scale, offset))
     }
 
     /// The image `name` (resolved against the scene's folder), linear RGB. PNGs are sRGB-decoded

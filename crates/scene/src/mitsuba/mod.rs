@@ -24,8 +24,8 @@
 //! Checked against Mitsuba 3.9.1 (`scalar_rgb`) renders of the same files. Known differences:
 //! - `envmap`: Mitsuba puts the centres of the first and last rows on the poles, candela's
 //!   bilinear lookup half a texel inside (at most half a texel of vertical shift);
-//! - `bitmap`: lookups repeat in u but clamp in v (Mitsuba repeats both: it matters only within
-//!   half a texel of the image's top and bottom), and `to_uv` cannot repeat the image;
+//! - texture `to_uv` transforms may scale and translate u and v, not rotate or shear them
+//!   (an error says so);
 //! - emissive meshes with vertex normals emit on the side of the geometric normal turned to the
 //!   interpolated one, Mitsuba on the side of the interpolated normal (only silhouettes differ);
 //! - a sphere whose `to_world` scales non-uniformly stays round, as in Mitsuba, but its uv follow
