@@ -2,12 +2,10 @@
 //! with a shared exponent (about 1 % relative precision). Negative and non-finite values cannot
 //! be stored: they are written as 0.
 
-use std::io::Cursor;
-
-use candela_render::{Image, Rgb};
+use candela_render::Image;
 use image::{codecs::hdr::HdrEncoder, ImageFormat};
 
-use crate::{check_size, image_from_pixels, ImageError};
+use crate::{check_size, decode_with_image, encode_with_image, ImageError};
 
 /// Decodes a Radiance HDR file held in memory. The first line is `#?` and the name of the
 /// program that wrote the file (`#?RADIANCE`, `#?RGBE` from Mitsuba and others, …): any name
@@ -21,15 +19,15 @@ pub fn read_hdr(bytes: &[u8]) -> Result<Image, ImageError> {
         }
         _ => bytes,
     };
-    let decoded = image::load_from_memory_with_format(bytes, ImageFormat::Hdr)
-        .map_err(|cause| ImageError::Hdr {
+    decode_with_image(
+        bytes,
+        ImageFormat::Hdr,
+        |x| x,
+        |cause| ImageError::Hdr {
             action: "decode",
             cause,
-        })?
-        .into_rgb32f();
-    let (width, height) = (decoded.width() as usize, decoded.height() as usize);
-    let pixels = decoded.pixels().map(|p| Rgb::new(p[0], p[1], p[2]));
-    Ok(image_from_pixels(width, height, pixels))
+        },
+    )
 }
 
 /// Encodes `img` as a Radiance HDR file (top row first).
@@ -43,19 +41,20 @@ pub fn write_hdr(img: &Image) -> Result<Vec<u8>, ImageError> {
             image::Rgb([clean(c.r), clean(c.g), clean(c.b)])
         })
         .collect();
-    let mut out = Cursor::new(Vec::new());
-    HdrEncoder::new(&mut out)
-        .encode(&pixels, img.width(), img.height())
-        .map_err(|cause| ImageError::Hdr {
+    encode_with_image(
+        |out| HdrEncoder::new(out).encode(&pixels, img.width(), img.height()),
+        |cause| ImageError::Hdr {
             action: "encode",
             cause,
-        })?;
-    Ok(out.into_inner())
+        },
+    )
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::image_from_pixels;
+    use candela_render::Rgb;
 
     #[test]
     fn round_trip_within_rgbe_precision() {

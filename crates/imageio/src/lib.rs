@@ -180,6 +180,34 @@ pub(crate) fn check_size(width: usize, height: usize) -> Result<(), ImageError> 
 
 /// An image of `width`×`height` filled from `pixels` (top row first); decoders guarantee that
 /// exactly `width · height` pixels follow, any shortfall would stay black.
+/// Decodes `bytes` in `format` through the `image` crate, mapping every channel by `f`;
+/// `error` wraps the codec's error.
+pub(crate) fn decode_with_image(
+    bytes: &[u8],
+    format: image::ImageFormat,
+    f: impl Fn(f32) -> f32,
+    error: impl FnOnce(image::ImageError) -> ImageError,
+) -> Result<Image, ImageError> {
+    let decoded = image::load_from_memory_with_format(bytes, format)
+        .map_err(error)?
+        .into_rgb32f();
+    let (width, height) = (decoded.width() as usize, decoded.height() as usize);
+    let pixels = decoded
+        .pixels()
+        .map(|p| Rgb::new(f(p[0]), f(p[1]), f(p[2])));
+    Ok(image_from_pixels(width, height, pixels))
+}
+
+/// Runs an `image` encoder into memory; `error` wraps the codec's error.
+pub(crate) fn encode_with_image(
+    encode: impl FnOnce(&mut std::io::Cursor<Vec<u8>>) -> Result<(), image::ImageError>,
+    error: impl FnOnce(image::ImageError) -> ImageError,
+) -> Result<Vec<u8>, ImageError> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    encode(&mut out).map_err(error)?;
+    Ok(out.into_inner())
+}
+
 pub(crate) fn image_from_pixels(
     width: usize,
     height: usize,

@@ -7,26 +7,19 @@
 //!
 //! Writing stores an already tone-mapped 8-bit RGB buffer (see [`crate::ToneMap`]) as is.
 
-use std::io::Cursor;
-
-use candela_render::{Image, Rgb};
+use candela_render::Image;
 use image::{codecs::png::PngEncoder, ExtendedColorType, ImageEncoder, ImageFormat};
 
-use crate::{check_size, image_from_pixels, tonemap::srgb_eotf, ImageError};
+use crate::{check_size, decode_with_image, encode_with_image, tonemap::srgb_eotf, ImageError};
 
 /// Decodes a PNG held in memory to linear RGB.
 pub fn read_png(bytes: &[u8]) -> Result<Image, ImageError> {
-    let decoded = image::load_from_memory_with_format(bytes, ImageFormat::Png)
-        .map_err(|cause| ImageError::Png {
+    decode_with_image(bytes, ImageFormat::Png, srgb_eotf, |cause| {
+        ImageError::Png {
             action: "decode",
             cause,
-        })?
-        .into_rgb32f();
-    let (width, height) = (decoded.width() as usize, decoded.height() as usize);
-    let pixels = decoded
-        .pixels()
-        .map(|p| Rgb::new(p[0], p[1], p[2]).map(srgb_eotf));
-    Ok(image_from_pixels(width, height, pixels))
+        }
+    })
 }
 
 /// Encodes an 8-bit RGB buffer (`3 · width · height` bytes, top row first) as a PNG.
@@ -41,19 +34,28 @@ pub fn write_png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, Ima
             got: rgb.len(),
         });
     }
-    let mut out = Cursor::new(Vec::new());
     // check_size guarantees that both sides fit in u32.
-    PngEncoder::new(&mut out)
-        .write_image(rgb, width as u32, height as u32, ExtendedColorType::Rgb8)
-        .map_err(|cause| ImageError::Png {
+    encode_with_image(
+        |out| {
+            PngEncoder::new(out).write_image(
+                rgb,
+                width as u32,
+                height as u32,
+                ExtendedColorType::Rgb8,
+            )
+        },
+        |cause| ImageError::Png {
             action: "encode",
             cause,
-        })?;
-    Ok(out.into_inner())
+        },
+    )
 }
 
 #[cfg(test)]
 mod tests {
+    use std::io::Cursor;
+
+    use candela_render::Rgb;
     use image::{DynamicImage, ImageBuffer, Luma, LumaA, Rgb as Rgb8, Rgba};
 
     use super::*;

@@ -151,48 +151,48 @@ impl RoughCoating {
 /// G1(wi, m) max(0, wi·m) D(m) / cos θ), wt the refracted direction; by stratified importance
 /// sampling of the normals.
 fn coating_transmittance(mf: &Microfacet, eta: f32, mu: f32) -> f32 {
-    let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-    let n = 48;
-    let mut sum = 0f64;
-    for i in 0..n {
-        for j in 0..n {
-            let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
-            let m = mf.sample(wi, u);
-            let q = mf.pdf(wi, m);
-            let cos_i = wi.dot(m);
-            if !(q > 0.0) || cos_i <= 0.0 {
-                continue;
-            }
-            let visible = mf.g1(wi, m) * cos_i * mf.d(m) / wi.z;
-            let (f, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, eta);
-            let wt = refract(wi, m, cos_t, eta_ti);
-            if wt.z * wi.z >= 0.0 {
-                continue;
-            }
-            sum += ((1.0 - f) * mf.g1(wt, m) * visible / q) as f64;
+    over_normals(mf, mu, |wi, m| {
+        let q = mf.pdf(wi, m);
+        let cos_i = wi.dot(m);
+        if !(q > 0.0) || cos_i <= 0.0 {
+            return 0.0;
         }
-    }
-    ((sum / (n * n) as f64) as f32).clamp(0.0, 1.0)
+        let visible = mf.g1(wi, m) * cos_i * mf.d(m) / wi.z;
+        let (f, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, eta);
+        let wt = refract(wi, m, cos_t, eta_ti);
+        if wt.z * wi.z >= 0.0 {
+            return 0.0;
+        }
+        (1.0 - f) * mf.g1(wt, m) * visible / q
+    })
 }
 
 /// The directional albedo of a rough dielectric coating's reflection at cos θ = `mu`, by
 /// stratified importance sampling of its microfacet normals.
 fn specular_albedo(mf: &Microfacet, eta: f32, mu: f32) -> f32 {
-    let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    over_normals(mf, mu, |wo, m| {
+        let wi = reflect(wo, m);
+        let pdf = microfacet_pdf(mf, wo, wi);
+        match (microfacet_lobe(mf, wo, wi), pdf > 0.0) {
+            (Some((v, h)), true) => fresnel_dielectric(wo.dot(h), eta).0 * v / pdf,
+            _ => 0.0,
+        }
+    })
+}
+
+/// The mean of `f(w, m)` over 48 × 48 stratified samples m of [`Microfacet::sample`] seen from
+/// the direction w at cos θ = `mu`, clamped to [0, 1].
+fn over_normals(mf: &Microfacet, mu: f32, f: impl Fn(Vec3, Vec3) -> f32) -> f32 {
+    let w = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let n = 48;
     let mut sum = 0f64;
     for i in 0..n {
         for j in 0..n {
             let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
-            let m = mf.sample(wo, u);
-            let wi = reflect(wo, m);
-            let pdf = microfacet_pdf(mf, wo, wi);
-            if let (Some((v, h)), true) = (microfacet_lobe(mf, wo, wi), pdf > 0.0) {
-                sum += (fresnel_dielectric(wo.dot(h), eta).0 * v / pdf) as f64;
-            }
+            sum += f(w, mf.sample(w, u)) as f64;
         }
     }
-    ((sum / (n * n) as f64) as f32).min(1.0)
+    ((sum / (n * n) as f64) as f32).clamp(0.0, 1.0)
 }
 
 /// Parameters of a rough plastic at one point.
