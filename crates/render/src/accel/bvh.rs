@@ -22,8 +22,12 @@
 //!
 //! Traversal: the eight boxes of a node are tested at once ([`super::simd`]: one AVX register,
 //! or two SSE ones), hit children are visited nearest entry first with the others on the stack
-//! with their entry distance (and prefetched); entries beyond the current closest hit are
-//! dropped when popped. Shadow rays take hit children in any order and stop at the first hit.
+//! with their entry distance; entries beyond the current closest hit are dropped when popped.
+//! Shadow rays take the nearest hit child next and the others in any order, and stop at the
+//! first hit. Every child about to be visited or pushed is prefetched, all of it (the four
+//! cache lines of a node, every block of a leaf), so that its lines load at once rather than
+//! one after another as the box test, then the child references, reach them: this matters for
+//! incoherent rays, which miss the caches.
 //! A block of four triangles is tested at once by the same arithmetic as
 //! [`crate::shape::intersect_triangle`], lane by lane, so that `t` and the barycentrics are
 //! bit-identical to [`crate::shape::Mesh::intersect`]. The ray's `tmax` is one ULP above the
@@ -303,8 +307,12 @@ impl Bvh {
         if r.meta == 0 {
             super::simd::prefetch(&self.nodes[r.child as usize]);
         } else if r.meta & !COUNT_MASK == TRI_LEAF {
-            if let Some(t) = self.tris.get(r.child as usize) {
-                super::simd::prefetch(t);
+            let first = r.child as usize;
+            let n = (r.meta & COUNT_MASK).div_ceil(4) as usize;
+            if let Some(ts) = self.tris.get(first..first + n) {
+                for t in ts {
+                    super::simd::prefetch(t);
+                }
             }
         }
     }
@@ -362,6 +370,7 @@ impl Bvh {
                     mask &= mask - 1;
                     if mask == 0 {
                         cur = r(c0);
+                        self.prefetch(cur);
                         continue;
                     }
                     if !Q::ORDERED {
@@ -376,10 +385,12 @@ impl Bvh {
                                 (near, c)
                             };
                             stack[sp] = (r(push), dist[push]);
+                            self.prefetch(r(push));
                             sp += 1;
                             near = keep;
                         }
                         cur = r(near);
+                        self.prefetch(cur);
                         continue;
                     }
                     let c1 = mask.trailing_zeros() as usize;
@@ -392,6 +403,7 @@ impl Bvh {
                         stack[sp] = (r(far), dist[far]);
                         self.prefetch(r(far));
                         cur = r(near);
+                        self.prefetch(cur);
                         sp += 1;
                         continue;
                     }
