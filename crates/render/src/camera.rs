@@ -10,8 +10,23 @@
 //!
 //! `a` is the aspect ratio (width/height of the screen). Camera rays are normalised in world
 //! space, so that hit parameters are distances.
+//!
+//! A perspective camera may have a thin [`Lens`] (depth of field, Mitsuba's `thinlens`): the
+//! ray for (u, v) then starts at a uniformly sampled point of the aperture, a disk around the
+//! eye perpendicular to the view axis, and passes through the point where the pinhole ray meets
+//! the plane in focus, so that only that plane is sharp.
 
 use crate::math::{Point3, Ray, Transform, Vec3};
+use crate::sampling::warp::square_to_concentric_disk;
+
+/// A thin lens, in the units of the camera's frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Radius of the aperture (> 0).
+    pub radius: f32,
+    /// Distance from the aperture to the plane in focus, along the view axis (> 0).
+    pub focus_distance: f32,
+}
 
 /// How a camera projects the scene.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,6 +49,8 @@ pub struct Camera {
     pub aspect_ratio: f32,
     /// Camera → world.
     pub world_from_camera: Transform,
+    /// The thin lens of a perspective camera with depth of field; `None` for a pinhole.
+    pub lens: Option<Lens>,
 }
 
 impl Camera {
@@ -43,6 +60,7 @@ impl Camera {
             projection: Projection::Orthogonal,
             aspect_ratio,
             world_from_camera,
+            lens: None,
         }
     }
 
@@ -52,6 +70,7 @@ impl Camera {
             projection: Projection::Perspective { distance },
             aspect_ratio,
             world_from_camera,
+            lens: None,
         }
     }
 
@@ -83,6 +102,34 @@ impl Camera {
         let t = &self.world_from_camera;
         Ray::new(t.point(o), t.vector(d).normalize())
     }
+
+    /// The same camera with a thin lens (perspective cameras only; others stay as they are).
+    pub fn with_lens(self, lens: Lens) -> Self {
+        match self.projection {
+            Projection::Perspective { .. } => Self {
+                lens: Some(lens),
+                ..self
+            },
+            Projection::Orthogonal => self,
+        }
+    }
+
+    /// The ray through (u, v) from the point of the aperture that `lens_sample` ∈ [0,1)² picks
+    /// uniformly; [`Camera::ray`] without a lens.
+    #[inline]
+    pub fn ray_through_lens(&self, u: f32, v: f32, lens_sample: [f32; 2]) -> Ray {
+        let (Some(lens), Projection::Perspective { distance }) = (self.lens, self.projection)
+        else {
+            return self.ray(u, v);
+        };
+        let eye = Point3::new(-distance, 0.0, 0.0);
+        let dir = Vec3::new(distance, (1.0 - 2.0 * u) * self.aspect_ratio, 2.0 * v - 1.0);
+        let focus = eye + dir * (lens.focus_distance / distance);
+        let p = square_to_concentric_disk(lens_sample);
+        let o = eye + Vec3::new(0.0, p.x * lens.radius, p.y * lens.radius);
+        let t = &self.world_from_camera;
+        Ray::new(t.point(o), t.vector(focus - o).normalize())
+    }
 }
 
 /// The screen distance whose vertical field of view is `fov_deg` degrees.
@@ -93,6 +140,50 @@ pub fn distance_for_fov(fov_deg: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every ray of a thin lens for one screen point starts on the aperture disk (radius 0.2
+    /// around the eye, across the view axis) and passes through the one point where the pinhole
+    /// ray meets the plane in focus (5 units ahead); without a lens nothing changes.
+    #[test]
+    fn thin_lens_rays_meet_on_the_plane_in_focus() {
+        let place = Transform::translation(Vec3::new(1.0, 2.0, 3.0)) * Transform::rotation_z(30.0);
+        let pinhole = Camera::perspective(2.0, 1.5, place);
+        let lens = Lens {
+            radius: 0.2,
+            focus_distance: 5.0,
+        };
+        let c = pinhole.with_lens(lens);
+        assert_eq!(
+            pinhole.ray_through_lens(0.3, 0.6, [0.9, 0.1]),
+            pinhole.ray(0.3, 0.6)
+        );
+        assert_eq!(Camera::orthogonal(1.0, place).with_lens(lens).lens, None);
+        let (u, v) = (0.3, 0.6);
+        let p = pinhole.ray(u, v);
+        let eye = place.point(Point3::new(-2.0, 0.0, 0.0));
+        let axis = place.vector(Vec3::X);
+        // The pinhole ray reaches the plane in focus after 5 / cos(angle to the axis).
+        let focus = p.at(5.0 / p.d.dot(axis));
+        let mut mean = Vec3::new(0.0, 0.0, 0.0);
+        let n = 64;
+        for i in 0..n {
+            let s = [(i % 8) as f32 / 8.0 + 0.03, (i / 8) as f32 / 8.0 + 0.05];
+            let r = c.ray_through_lens(u, v, s);
+            let off = r.o - eye;
+            assert!(
+                off.norm() <= 0.2 + 1e-5 && off.dot(axis).abs() < 1e-5,
+                "{off:?}"
+            );
+            let t = (focus - r.o).dot(r.d);
+            assert!(
+                (r.at(t) - focus).norm() < 1e-4,
+                "{i}: misses the focus point"
+            );
+            mean += off / n as f32;
+        }
+        // The stratified aperture samples are spread around the eye.
+        assert!(mean.norm() < 0.02, "{mean:?}");
+    }
 
     #[test]
     fn orthogonal_corner_rays_by_hand() {

@@ -126,7 +126,10 @@ fn render_pixel(
         let [sx, sy] = sampler.pixel_sample(i);
         let u = (x as f32 + sx) / w;
         let v = 1.0 - (y as f32 + sy) / h;
-        let ray = scene.camera.ray(u, v);
+        let ray = match scene.camera.lens {
+            None => scene.camera.ray(u, v),
+            Some(_) => scene.camera.ray_through_lens(u, v, sampler.next_2d()),
+        };
         let l = integrator.radiance(scene, &ray, sampler, stats);
         stats.samples += 1;
         if l.is_finite() {

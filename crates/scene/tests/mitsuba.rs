@@ -94,6 +94,50 @@ fn camera_scene(fov: &str, origin: &str) -> String {
     ))
 }
 
+/// `thinlens`: the aperture is a disk of `aperture_radius` around the eye, and every ray for a
+/// screen point crosses the pinhole ray where it is `focus_distance` ahead along the view axis
+/// (Mitsuba's definition); the radius is required, the focus distance defaults to far_clip.
+#[test]
+fn thin_lens_camera() {
+    let lens_scene = |params: &str| {
+        scene(&format!(
+            r#"<sensor type="thinlens"><float name="fov" value="60"/>{params}
+                <transform name="to_world"><lookat origin="1, 2, 3" target="1, 2, 0" up="0, 1, 0"/></transform>
+                {SENSOR_200X100}
+            </sensor>"#
+        ))
+    };
+    let l = load(&lens_scene(
+        r#"<float name="aperture_radius" value="0.25"/><float name="focus_distance" value="4"/>"#,
+    ));
+    let cam = l.scene.camera;
+    let lens = cam.lens.expect("a lens");
+    assert_eq!((lens.radius, lens.focus_distance), (0.25, 4.0));
+    let pinhole = cam.ray(0.7, 0.4);
+    // The view axis is -z: the plane in focus is z = 3 - 4.
+    let focus = pinhole.at(-4.0 / pinhole.d.z);
+    for s in [[0.1, 0.2], [0.9, 0.5], [0.5, 0.99]] {
+        let r = cam.ray_through_lens(0.7, 0.4, s);
+        assert!(
+            (r.o.z - 3.0).abs() < 1e-5 && (r.o - Point3::new(1.0, 2.0, 3.0)).norm() <= 0.25 + 1e-5
+        );
+        let t = (focus.z - r.o.z) / r.d.z;
+        assert!(
+            (r.at(t) - focus).norm() < 1e-4,
+            "{:?} vs {focus:?}",
+            r.at(t)
+        );
+    }
+    let far = load(&lens_scene(
+        r#"<float name="aperture_radius" value="0.1"/><float name="far_clip" value="50"/>"#,
+    ));
+    assert_eq!(far.scene.camera.lens.unwrap().focus_distance, 50.0);
+    // A zero aperture is a pinhole.
+    let zero = load(&lens_scene(r#"<float name="aperture_radius" value="0"/>"#));
+    assert_eq!(zero.scene.camera.lens, None);
+    assert_error_starts_with(&lens_scene(""), "2:1: thinlens needs an 'aperture_radius'");
+}
+
 #[test]
 fn perspective_camera_uses_mitsubas_frame() {
     // Looking along -z with +y up: the image's right is +x (Mitsuba's local +x is on the left).

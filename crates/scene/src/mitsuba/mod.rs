@@ -7,7 +7,7 @@
 //! resolving `<ref id>`s (to any id of the file) and building candela's scene:
 //!
 //! - sensors `perspective` (`fov`/`focal_length`, `fov_axis`; Mitsuba's camera frame: +z forward,
-//!   +y up, +x to the left of the image), `thinlens` (as a pinhole), `orthographic`; film
+//!   +y up, +x to the left of the image), `thinlens` (depth of field), `orthographic`; film
 //!   `hdrfilm` (`width`, `height`), any sampler (`sample_count`);
 //! - shapes `sphere`, `rectangle`, `disk`, `cube`, `obj`, `ply` with `to_world`, `flip_normals`,
 //!   `face_normals`, a BSDF (Mitsuba's default: one-sided diffuse 0.5) and an `area` emitter
@@ -30,8 +30,7 @@
 //!   interpolated one, Mitsuba on the side of the interpolated normal (only silhouettes differ);
 //! - a sphere whose `to_world` scales non-uniformly stays round, as in Mitsuba, but its uv follow
 //!   the rotation of the polar decomposition instead of Mitsuba's inverse `to_world`;
-//! - films are filtered with a box (warning otherwise), `thinlens` is a pinhole, crop windows
-//!   are ignored (warnings);
+//! - films are filtered with a box (warning otherwise), crop windows are ignored (warnings);
 //! - colours are RGB: spectra must be single values (a flat emitted spectrum has the colour of
 //!   illuminant E, as in Mitsuba's RGB variants); conductor presets are Mitsuba's RGB values;
 //! - a scene without `<sensor>` gets a default camera (Mitsuba 3.9.1 cannot render it).
@@ -46,7 +45,7 @@ use self::math::M4;
 use self::xml::{Element, Props};
 use crate::error::{Pos, SceneError, SourceFile};
 use crate::load::{LoadOptions, LoadedScene, RenderHints};
-use candela_render::camera::Camera;
+use candela_render::camera::{Camera, Lens};
 use candela_render::light::{
     Components, DistantLight, Environment, Falloff, Light, PointLight, SpotLight, SpotProfile,
 };
@@ -473,13 +472,8 @@ impl<'t> Loader<'t> {
         self.hints.height = Some(height);
         let aspect = width as f64 / height as f64;
         let (to_world, _) = self.to_world(&p)?;
-        p.ignore(&[
-            "near_clip",
-            "far_clip",
-            "shutter_open",
-            "shutter_close",
-            "srf",
-        ]);
+        let far_clip = p.number_in("far_clip", 1e4, (f64::MIN_POSITIVE, f64::MAX))?;
+        p.ignore(&["near_clip", "shutter_open", "shutter_close", "srf"]);
         let camera = match e.kind() {
             kind @ ("perspective" | "thinlens") => {
                 let lin = to_world.0;
@@ -491,13 +485,22 @@ impl<'t> Loader<'t> {
                         "the sensor's to_world must not scale (Mitsuba rejects it)",
                     ));
                 }
-                if kind == "thinlens" {
-                    p.ignore(&["aperture_radius", "focus_distance"]);
-                    self.warn(
-                        e.pos,
-                        "thinlens: depth of field is not supported, the camera is a pinhole",
-                    );
-                }
+                // Mitsuba's thin lens: the aperture radius is required, the focus distance
+                // defaults to the far clipping distance.
+                let lens = if kind == "thinlens" {
+                    if !p.has("aperture_radius") {
+                        return Err(self.err(e.pos, "thinlens needs an 'aperture_radius'"));
+                    }
+                    let radius = p.number_in("aperture_radius", 0.0, (0.0, f64::MAX))?;
+                    let focus =
+                        p.number_in("focus_distance", far_clip, (f64::MIN_POSITIVE, f64::MAX))?;
+                    (radius > 0.0).then_some(Lens {
+                        radius: radius as f32,
+                        focus_distance: focus as f32,
+                    })
+                } else {
+                    None
+                };
                 for n in ["principal_point_offset_x", "principal_point_offset_y"] {
                     if p.or(n, 0.0)? != 0.0 {
                         self.warn(p.pos(n), format!("'{n}' is not supported and is ignored"));
@@ -505,9 +508,13 @@ impl<'t> Loader<'t> {
                 }
                 p.ignore(&["focus_distance"]);
                 let fov = self.x_fov(&p, aspect)?;
-                perspective(&to_world, fov, aspect).ok_or_else(|| {
+                let camera = perspective(&to_world, fov, aspect).ok_or_else(|| {
                     self.err(p.pos("to_world"), "the camera transformation is singular")
-                })?
+                })?;
+                match lens {
+                    Some(l) => camera.with_lens(l),
+                    None => camera,
+                }
             }
             "orthographic" => {
                 // Mitsuba's orthographic camera sees [-1,1] × [-1/aspect, 1/aspect] of its local
