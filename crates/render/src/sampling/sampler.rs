@@ -50,10 +50,8 @@ impl SamplerKind {
 pub struct Sampler {
     rng: Pcg32,
     spp: u32,
-    /// The pixel's pattern seed for jittered strata; `None` otherwise.
-    strata: Option<u32>,
-    /// The pixel's scrambling seed; `None` for an independent sampler.
-    sobol: Option<u32>,
+    /// How the numbers are made, with the pixel's pattern seed.
+    mode: Mode,
     /// The sample being drawn, and its index with the bits reversed.
     index: u32,
     rindex: u32,
@@ -74,6 +72,14 @@ pub struct Sampler {
     /// The pairs of the first [`BATCH_DIMS`] dimensions of the chunk's samples, as
     /// [`Sampler::next_2d`] returns them (the first of a pair is [`Sampler::next_1d`]'s number).
     batch: [[[f32; 2]; CHUNK]; BATCH_DIMS],
+}
+
+/// A sampler's way of making numbers (see [`SamplerKind`]), with the pixel's seed.
+#[derive(Clone, Copy, Debug)]
+enum Mode {
+    Independent,
+    Sobol(u32),
+    Strata(u32),
 }
 
 /// Samples whose first dimensions a Sobol pixel sampler computes together.
@@ -128,8 +134,11 @@ impl Sampler {
         let pattern = (h >> 32) as u32 ^ h as u32;
         self.rng = Pcg32::new(h, pixel);
         self.spp = spp.max(1);
-        self.strata = (kind == SamplerKind::Stratified).then_some(pattern);
-        self.sobol = (kind == SamplerKind::Sobol).then_some(pattern);
+        self.mode = match kind {
+            SamplerKind::Sobol => Mode::Sobol(pattern),
+            SamplerKind::Stratified => Mode::Strata(pattern),
+            SamplerKind::Independent => Mode::Independent,
+        };
         self.index = 0;
         self.rindex = 0;
         self.dim = 0;
@@ -144,8 +153,7 @@ impl Sampler {
         Self {
             rng: Pcg32::new(hash2(seed, stream), stream),
             spp: 1,
-            strata: None,
-            sobol: None,
+            mode: Mode::Independent,
             index: 0,
             rindex: 0,
             dim: 0,
@@ -234,8 +242,8 @@ impl Sampler {
     /// The next uniform number.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        match self.sobol {
-            Some(seed) => {
+        match self.mode {
+            Mode::Sobol(seed) => {
                 if let Some(p) = self.batched(seed) {
                     self.dim += 1;
                     return p[0];
@@ -247,25 +255,23 @@ impl Sampler {
                 let r = laine_karras(self.rindex, s.shuffle);
                 to_unit(laine_karras(r.reverse_bits(), s.x).reverse_bits())
             }
-            None => match self.strata {
-                Some(pattern) => {
-                    let p = hash_u32(pattern, self.dim);
-                    self.dim += 1;
-                    let n = self.spp;
-                    let stratum = permute(self.index % n, n, p);
-                    ((stratum as f32 + randfloat(self.index, p ^ 0x2c1b_3c6d)) / n as f32)
-                        .min(ONE_MINUS_EPSILON)
-                }
-                None => self.rng.next_f32(),
-            },
+            Mode::Strata(pattern) => {
+                let p = hash_u32(pattern, self.dim);
+                self.dim += 1;
+                let n = self.spp;
+                let stratum = permute(self.index % n, n, p);
+                ((stratum as f32 + randfloat(self.index, p ^ 0x2c1b_3c6d)) / n as f32)
+                    .min(ONE_MINUS_EPSILON)
+            }
+            Mode::Independent => self.rng.next_f32(),
         }
     }
 
     /// The next pair of uniform numbers.
     #[inline]
     pub fn next_2d(&mut self) -> [f32; 2] {
-        match self.sobol {
-            Some(seed) => {
+        match self.mode {
+            Mode::Sobol(seed) => {
                 if let Some(p) = self.batched(seed) {
                     self.dim += 2;
                     return p;
@@ -274,36 +280,34 @@ impl Sampler {
                 self.dim += 2;
                 // The shuffled index is i = R(r) with r = LK(R(index)) (R: bit reversal). The
                 // scrambled points are R(LK(R(vdc(i)))) = R(LK(i)) and R(LK(R(sobol1(i)))) =
-                // R(LK(G(r))) with G = R∘sobol1∘R, so only three reversals remain.
+                // R(LK(G(r))) with G = R∘sobol1∘R, i.e. G(r) = reversed_sobol_dim1(R(r)).
                 let r = laine_karras(self.rindex, s.shuffle);
-                let x = laine_karras(r.reverse_bits(), s.x);
-                let y = laine_karras(sobol_dim1_reversed(r), s.y);
+                let rr = r.reverse_bits();
+                let x = laine_karras(rr, s.x);
+                let y = laine_karras(reversed_sobol_dim1(rr), s.y);
                 // Both final reversals in one: reversing the 64 bits of (x, y) gives (R(y), R(x)).
                 let xy = ((x as u64) << 32 | y as u64).reverse_bits();
                 [to_unit(xy as u32), to_unit((xy >> 32) as u32)]
             }
-            None => match self.strata {
-                Some(pattern) => {
-                    let p = hash_u32(pattern, self.dim);
-                    self.dim += 2;
-                    cmj(self.index % self.spp, self.spp, p)
-                }
-                None => {
-                    let a = self.rng.next_f32();
-                    let b = self.rng.next_f32();
-                    [a, b]
-                }
-            },
+            Mode::Strata(pattern) => {
+                let p = hash_u32(pattern, self.dim);
+                self.dim += 2;
+                cmj(self.index % self.spp, self.spp, p)
+            }
+            Mode::Independent => {
+                let a = self.rng.next_f32();
+                let b = self.rng.next_f32();
+                [a, b]
+            }
         }
     }
 
     /// A uniform integer in `[0, n)` (`n` > 0).
     #[inline]
     pub fn next_index(&mut self, n: u32) -> u32 {
-        match self.sobol {
-            Some(_) => ((self.next_1d() * n as f32) as u32).min(n - 1),
-            None if self.strata.is_some() => ((self.next_1d() * n as f32) as u32).min(n - 1),
-            None => self.rng.next_bounded(n),
+        match self.mode {
+            Mode::Independent => self.rng.next_bounded(n),
+            Mode::Sobol(_) | Mode::Strata(_) => ((self.next_1d() * n as f32) as u32).min(n - 1),
         }
     }
 }
@@ -342,7 +346,7 @@ impl crate::accel::simd::Kernel for Batch<'_> {
 
 /// The second Sobol dimension of index `i`, bit-reversed: R(sobol₁(i)) is the superset sum
 /// Z(i) (by Lucas' theorem, bit 31 − m of sobol₁(i) is the parity of the set bits k ⊇ m of
-/// i), so G(r) = Z(R(r)). ALU operations only, unlike the tables of [`sobol_dim1_reversed`].
+/// i), so G(r) = R(sobol₁(R(r))) = Z(R(r)). ALU operations only.
 #[inline(always)]
 fn reversed_sobol_dim1(mut x: u32) -> u32 {
     x ^= (x & 0xaaaa_aaaa) >> 1;
@@ -350,46 +354,6 @@ fn reversed_sobol_dim1(mut x: u32) -> u32 {
     x ^= (x & 0xf0f0_f0f0) >> 4;
     x ^= (x & 0xff00_ff00) >> 8;
     x ^ (x & 0xffff_0000) >> 16
-}
-
-/// G = R∘sobol₁∘R, the second Sobol dimension conjugated by bit reversal: linear over GF(2),
-/// so it is the XOR of four byte tables. (The direction numbers of sobol₁ are
-/// v_k = v_{k−1} ⊕ v_{k−1}/2 from v_0 = 2³¹; bit b of the input maps to R(v_{31−b}).)
-#[inline]
-fn sobol_dim1_reversed(r: u32) -> u32 {
-    const fn table() -> [[u32; 256]; 4] {
-        let mut v = [0u32; 32];
-        v[0] = 1 << 31;
-        let mut k = 1;
-        while k < 32 {
-            v[k] = v[k - 1] ^ (v[k - 1] >> 1);
-            k += 1;
-        }
-        let mut t = [[0u32; 256]; 4];
-        let mut byte = 0;
-        while byte < 4 {
-            let mut b = 0;
-            while b < 256 {
-                let mut acc = 0;
-                let mut bit = 0;
-                while bit < 8 {
-                    if b & (1 << bit) != 0 {
-                        acc ^= v[31 - (byte * 8 + bit)].reverse_bits();
-                    }
-                    bit += 1;
-                }
-                t[byte][b] = acc;
-                b += 1;
-            }
-            byte += 1;
-        }
-        t
-    }
-    static TABLE: [[u32; 256]; 4] = table();
-    TABLE[0][(r & 0xff) as usize]
-        ^ TABLE[1][((r >> 8) & 0xff) as usize]
-        ^ TABLE[2][((r >> 16) & 0xff) as usize]
-        ^ TABLE[3][(r >> 24) as usize]
 }
 
 /// Laine and Karras' hash-based permutation, which only lets bits influence higher bits.
@@ -523,16 +487,15 @@ mod tests {
         }
     }
 
-    /// The ALU form of the reversed second Sobol dimension is the tables' (both are linear over
-    /// GF(2), so the 32 unit vectors decide).
+    /// The ALU form of the reversed second Sobol dimension is R(sobol₁) computed from its
+    /// direction numbers v_k = v_{k−1} ⊕ v_{k−1}/2, v_0 = 2³¹ (both are linear over GF(2), so
+    /// the 32 unit vectors decide).
     #[test]
-    fn reversed_sobol_dim1_matches_the_tables() {
+    fn reversed_sobol_dim1_matches_the_direction_numbers() {
+        let mut v = 1u32 << 31;
         for b in 0..32 {
-            let r = 1u32 << b;
-            assert_eq!(
-                reversed_sobol_dim1(r.reverse_bits()),
-                sobol_dim1_reversed(r)
-            );
+            assert_eq!(reversed_sobol_dim1(1 << b), v.reverse_bits(), "bit {b}");
+            v ^= v >> 1;
         }
     }
 
@@ -545,12 +508,14 @@ mod tests {
             let s = DimSeeds::new(seed, dim);
             let r = laine_karras(index.reverse_bits(), s.shuffle);
             let x = laine_karras(r.reverse_bits(), s.x).reverse_bits();
-            let y = laine_karras(sobol_dim1_reversed(r), s.y).reverse_bits();
+            let y = laine_karras(reversed_sobol_dim1(r.reverse_bits()), s.y).reverse_bits();
             [to_unit(x), to_unit(y)]
         };
         for spp in [1u32, 5, 64, 100, 200] {
             let mut s = Sampler::for_pixel(7, 1234, spp);
-            let seed = s.sobol.expect("sobol");
+            let Mode::Sobol(seed) = s.mode else {
+                panic!("sobol")
+            };
             let mut order: Vec<u32> = (0..spp).collect();
             // Forward, then a scrambled order (earlier samples after later ones).
             order.extend((0..spp).map(|i| (i * 37 + 11) % spp));
