@@ -22,6 +22,7 @@ which is what a Monte Carlo estimator over continuous wavelengths converges to.
 """
 
 import os
+import struct
 import subprocess
 import sys
 
@@ -40,15 +41,17 @@ D65_TAIL = {785: 63.8434, 790: 64.304, 795: 61.8779, 800: 59.4519, 805: 55.7054,
 
 def f32(v):
     """The shortest decimal that rounds to the same f32, as a Rust literal."""
-    s = repr(np.float32(v)).replace("np.float32(", "").rstrip(")")
-    if "e" not in s and "." not in s:
-        s += ".0"
+    x = struct.unpack("<f", struct.pack("<f", float(v)))[0]
+    for digits in range(1, 18):
+        s = f"{x:.{digits}g}"
+        if struct.unpack("<f", struct.pack("<f", float(s)))[0] == x:
+            break
     if "e" in s:
         m, e = s.split("e")
         if "." not in m:
             m += ".0"
-        s = f"{m}e{int(e)}"
-    return s
+        return f"{m}e{int(e)}"
+    return s if "." in s else s + ".0"
 
 
 def main():

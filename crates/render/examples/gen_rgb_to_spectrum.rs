@@ -2,9 +2,12 @@
 //! table of Jakob & Hanika 2019 ("A Low-Dimensional Function Space for Efficient Spectral
 //! Upsampling"), with our own optimiser.
 //!
-//! `cargo run --release -p candela-render --example gen_rgb_to_spectrum -- [N] [OUT]`
+//! `cargo run --profile test -p candela-render --example gen_rgb_to_spectrum -- [N] [OUT]`
 //! (N = 32 nodes per axis by default: 3 × 32³ × 3 f32 = 1.2 MB; OUT defaults to the committed
-//! file). About a minute on two cores.
+//! file; `GEN_VERBOSE=1` lists the nodes that did not converge). A few seconds; the output is
+//! deterministic (the committed file is reproduced byte for byte). Only the white corner
+//! (1, 1, 1), which no finite coefficients reach, stays above the tolerance (residual 7e-3
+//! ΔE; lookups of exact greys never use the table).
 //!
 //! # The fit
 //!
@@ -16,13 +19,14 @@
 //! spectrum's colour; three residuals, three unknowns, solved by Levenberg–Marquardt with the
 //! analytic Jacobian (Gauss–Newton steps once close).
 //!
-//! Continuation (the paper's, from the grey axis): every (largest channel l, z node) slab is
-//! solved separately; its grey point (z, z, z) starts from the constant spectrum S⁻¹(z); then
-//! the (x, y) grid is walked from the grey corner (x = y = 1) outwards, each node starting
-//! from its already solved neighbour; when a step does not converge it is split in two
-//! (recursively) along the straight line in RGB between the neighbour's colour and the
-//! target. The z = 0 slab (black, unreachable with finite coefficients) copies the next one:
-//! colours whose largest channel is below its node (~3e-5) are off by at most that.
+//! Continuation (the paper's, from the grey axis): in each of the three tables the slab nearest
+//! z = ½ is solved first, from its grey point (z, z, z) (the constant spectrum S⁻¹(z)) outwards
+//! over the (x, y) grid, each node starting from its already solved neighbour; then every
+//! (x, y) column is followed along z, up to 1 and down towards 0, each node starting from the
+//! previous one. When a step does not converge it is split in two (recursively, six levels)
+//! along the straight line in RGB between the two colours. The z = 0 slab (black, unreachable
+//! with finite coefficients) copies the next one: colours whose largest channel is below its
+//! node (~3e-5) are off by at most that (and from_rgb refines them anyway).
 //!
 //! The coefficients are finally converted to λ in nm (c₀λ² + c₁λ + c₂) and written as f32:
 //! header `b"CDLSIG01"`, N (u32 LE), 0 (u32), then `[l][z][y][x][c₀, c₁, c₂]`.
@@ -35,6 +39,9 @@ use candela_render::spectrum::{d65_normalized, table_z_node, CIE_Y_NORMALIZER, T
 use rayon::prelude::*;
 
 const SAMPLES: usize = 471;
+
+/// A solved column of the table: (l, y index, x index), coefficients and residual per z node.
+type Column = ((usize, usize, usize), Vec<[f64; 3]>, Vec<f64>);
 /// Convergence: CIELAB residual norm.
 const TOL: f64 = 1e-7;
 
@@ -317,7 +324,7 @@ fn main() {
     let columns: Vec<(usize, usize, usize)> = (0..3)
         .flat_map(|l| (0..n).flat_map(move |j| (0..n).map(move |i| (l, j, i))))
         .collect();
-    let solved: Vec<((usize, usize, usize), Vec<[f64; 3]>, Vec<f64>)> = columns
+    let solved: Vec<Column> = columns
         .par_iter()
         .map(|&(l, j, i)| {
             let (x, y) = (coord(i), coord(j));

@@ -12,7 +12,8 @@ use super::sampled::SampledSpectrum;
 use super::tabulated::TabulatedSpectrum;
 use super::wavelengths::SampledWavelengths;
 
-/// Named glasses: (names, Sellmeier B, Sellmeier C in µm²).
+/// Named glasses: (names, Sellmeier B, Sellmeier C in µm²), with the published digits.
+#[allow(clippy::excessive_precision)]
 const GLASSES: &[(&[&str], [f32; 3], [f32; 3])] = &[
     // SCHOTT N-BK7 (borosilicate crown), data sheet: n_d = 1.51680, V_d = 64.17.
     (

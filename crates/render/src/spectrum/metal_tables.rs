@@ -8,9 +8,15 @@
 //! samples inside 360–830 nm and the nearest one outside on each side. Identical tables
 //! are shared.
 
-/// (Mitsuba's material name, η samples, k samples), sorted by name; samples are
+// Measured values such as 3.14 are data, not approximations of π.
+#![allow(clippy::approx_constant)]
+
+/// One conductor: (Mitsuba's material name, η samples, k samples); samples are
 /// (wavelength in nm, value) with increasing wavelengths.
-pub static METALS: &[(&str, &[(f32, f32)], &[(f32, f32)])] = &[
+pub type MetalEntry = (&'static str, &'static [(f32, f32)], &'static [(f32, f32)]);
+
+/// Every conductor, sorted by name.
+pub static METALS: &[MetalEntry] = &[
     ("Ag", &T0, &T1),
     ("Al", &T2, &T3),
     ("AlAs", &T4, &T5),

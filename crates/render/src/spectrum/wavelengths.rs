@@ -40,7 +40,7 @@ const VIS_T0: f32 = 0.856_910_6;
 /// tanh(0.0072 (830 − 538)) − tanh(0.0072 (360 − 538)).
 const VIS_SPAN: f32 = 1.827_502;
 /// 0.0072 / VIS_SPAN: the normalisation of the visible density.
-const VIS_NORM: f32 = 0.003_939_804_2;
+const VIS_NORM: f32 = 0.003_939_804;
 /// The density's rate (per nm).
 const VIS_RATE: f32 = 0.0072;
 /// The density's centre (nm).
