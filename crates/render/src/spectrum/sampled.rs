@@ -2,8 +2,9 @@
 //!
 //! In spectral mode the lanes hold a quantity's values at the four wavelengths of a path's
 //! [`SampledWavelengths`](super::SampledWavelengths); in RGB mode they hold `(r, g, b, 0)`. All
-//! operations are lane-wise plain loops over `[f32; 4]` with no branches, which LLVM compiles to
-//! single SSE instructions (the type is 16-byte aligned).
+//! operations are lane-wise plain loops over `[f32; 4]` without branches (selects only), the
+//! form LLVM turns into four-wide SSE operations (the type is 16-byte aligned; the
+//! transcendental `exp` stays four scalar calls).
 
 use std::ops::{
     Add, AddAssign, Div, DivAssign, Index, IndexMut, Mul, MulAssign, Neg, Sub, SubAssign,
