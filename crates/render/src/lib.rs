@@ -19,6 +19,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod shape;
+pub mod spectrum;
 pub mod stats;
 pub mod texture;
 
