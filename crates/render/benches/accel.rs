@@ -11,8 +11,8 @@
 use std::sync::OnceLock;
 
 use candela_render::accel::{Accel, AccelKind};
+use candela_render::geometry::Geometry;
 use candela_render::math::Ray;
-use candela_render::scene::Geometry;
 use candela_render::stats::RayStats;
 use divan::counter::ItemsCount;
 use divan::{black_box, Bencher};

@@ -14,8 +14,8 @@
 use std::time::Instant;
 
 use candela_render::accel::{Accel, AccelKind};
+use candela_render::geometry::Geometry;
 use candela_render::math::Ray;
-use candela_render::scene::Geometry;
 use candela_render::stats::RayStats;
 use rayon::prelude::*;
 

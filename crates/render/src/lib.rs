@@ -8,6 +8,7 @@
 pub mod accel;
 pub mod camera;
 pub mod color;
+pub mod geometry;
 pub mod image;
 pub mod integrator;
 pub mod interaction;
@@ -19,6 +20,7 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod shape;
+pub(crate) mod simd;
 pub mod spectrum;
 pub mod stats;
 pub mod texture;

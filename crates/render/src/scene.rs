@@ -4,206 +4,13 @@
 use crate::accel::{Accel, AccelKind};
 use crate::camera::Camera;
 use crate::color::Rgb;
+use crate::geometry::{Geometry, Object};
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
-use crate::light::{AreaLight, Light};
+use crate::light::{AreaLight, Emission, Light};
 use crate::material::{Material, MaterialId};
-use crate::math::{Bounds3, Point3, Ray, Transform, Vec3};
-use crate::shape::{Mesh, Shape, ShapeHit, ShearedRay};
+use crate::math::{Point3, Ray, Transform, Vec3};
+use crate::shape::{Mesh, Shape, ShearedRay};
 use crate::stats::RayStats;
-use crate::texture::Texture;
-
-/// Emitted radiance of a surface.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Emission {
-    /// Radiance over the surface's uv.
-    pub radiance: Texture,
-    /// Emits on both sides (candela language) or only on the side of the normal (Mitsuba).
-    pub two_sided: bool,
-}
-
-impl Emission {
-    /// The radiance leaving the surface point of `si` towards `w` (pointing away from it).
-    #[inline]
-    pub fn radiance(&self, si: &SurfaceInteraction, w: Vec3) -> Rgb {
-        self.radiance_at(si.uv, si.n, w)
-    }
-
-    /// The radiance leaving the point with surface coordinates `uv` and geometric normal `n`
-    /// towards `w`.
-    #[inline]
-    pub fn radiance_at(&self, uv: crate::math::Point2, n: crate::math::Normal3, w: Vec3) -> Rgb {
-        if !self.two_sided && n.dot_vec(w) <= 0.0 {
-            return Rgb::BLACK;
-        }
-        self.radiance.eval(uv)
-    }
-}
-
-/// A shape with its surface properties.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Object {
-    /// The shape.
-    pub shape: Shape,
-    /// Material, emission, light.
-    pub props: SurfaceProps,
-}
-
-/// What a primitive id stands for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PrimRef {
-    /// An analytic shape (index into the objects).
-    Object(u32),
-    /// A mesh triangle.
-    Triangle {
-        /// The mesh.
-        mesh: u32,
-        /// The triangle in the mesh.
-        tri: u32,
-    },
-}
-
-/// All shapes of a scene, indexed by primitive id: bounded primitives first (the ones the
-/// acceleration structures hold: analytic shapes and individual mesh triangles), then unbounded
-/// ones (planes, tested one by one).
-#[derive(Clone, Debug, Default)]
-pub struct Geometry {
-    objects: Vec<Object>,
-    meshes: Vec<Mesh>,
-    prims: Vec<PrimRef>,
-    bounded: u32,
-}
-
-impl Geometry {
-    /// Gathers objects and meshes; primitive ids list bounded objects, then every mesh
-    /// triangle, then unbounded objects.
-    pub fn new(objects: Vec<Object>, meshes: Vec<Mesh>) -> Self {
-        let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
-            (0..objects.len() as u32).partition(|&i| objects[i as usize].shape.bounds().is_some());
-        let mut prims: Vec<PrimRef> = bounded.into_iter().map(PrimRef::Object).collect();
-        for (m, mesh) in meshes.iter().enumerate() {
-            prims.extend((0..mesh.len() as u32).map(|tri| PrimRef::Triangle {
-                mesh: m as u32,
-                tri,
-            }));
-        }
-        let n = prims.len() as u32;
-        prims.extend(unbounded.into_iter().map(PrimRef::Object));
-        Self {
-            objects,
-            meshes,
-            prims,
-            bounded: n,
-        }
-    }
-
-    /// Number of bounded primitives (ids `0..bounded_count()`).
-    #[inline]
-    pub fn bounded_count(&self) -> u32 {
-        self.bounded
-    }
-
-    /// Number of primitives.
-    #[inline]
-    pub fn prim_count(&self) -> u32 {
-        self.prims.len() as u32
-    }
-
-    /// The objects.
-    pub fn objects(&self) -> &[Object] {
-        &self.objects
-    }
-
-    /// The meshes.
-    pub fn meshes(&self) -> &[Mesh] {
-        &self.meshes
-    }
-
-    /// What primitive `prim` is.
-    #[inline]
-    pub fn prim(&self, prim: u32) -> PrimRef {
-        self.prims[prim as usize]
-    }
-
-    /// The one intersection routine of primitive `prim`, shared by every accelerator.
-    #[inline]
-    pub fn intersect_prim(&self, prim: u32, ray: &Ray, sr: &ShearedRay) -> Option<Hit> {
-        let h = match self.prims[prim as usize] {
-            PrimRef::Object(o) => self.objects[o as usize].shape.intersect(ray),
-            PrimRef::Triangle { mesh, tri } => self.meshes[mesh as usize].intersect(tri, ray, sr),
-        }?;
-        Some(Hit {
-            t: h.t,
-            prim,
-            uv: h.uv,
-            sub: h.sub,
-            leaf: h.leaf,
-        })
-    }
-
-    /// Bounds of a bounded primitive.
-    pub fn prim_bounds(&self, prim: u32) -> Bounds3 {
-        match self.prims[prim as usize] {
-            PrimRef::Object(o) => self.objects[o as usize]
-                .shape
-                .bounds()
-                .unwrap_or(Bounds3::EMPTY),
-            PrimRef::Triangle { mesh, tri } => self.meshes[mesh as usize].triangle_bounds(tri),
-        }
-    }
-
-    /// Bounds of all bounded primitives.
-    pub fn bounds(&self) -> Bounds3 {
-        (0..self.bounded).fold(Bounds3::EMPTY, |b, p| b.union(self.prim_bounds(p)))
-    }
-
-    /// The full interaction for a hit found along `ray`.
-    #[inline(always)]
-    pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
-        let sh = ShapeHit {
-            t: hit.t,
-            uv: hit.uv,
-            sub: hit.sub,
-            leaf: hit.leaf,
-        };
-        let (g, props, frame) = match self.prims[hit.prim as usize] {
-            PrimRef::Object(o) => {
-                let obj = &self.objects[o as usize];
-                match &obj.shape {
-                    // Flat shapes with their frames ready.
-                    Shape::Parallelogram(p) => {
-                        (p.geometry(sh.uv[0], sh.uv[1]), obj.props, Some(p.frame()))
-                    }
-                    Shape::Cube(c) => (
-                        c.geometry(ray, sh.t, sh.sub),
-                        obj.props,
-                        Some(c.face_frame(sh.sub)),
-                    ),
-                    shape => (
-                        shape.geometry(ray, &sh),
-                        shape.hit_props(&sh).unwrap_or(obj.props),
-                        None,
-                    ),
-                }
-            }
-            PrimRef::Triangle { mesh, tri } => {
-                let m = &self.meshes[mesh as usize];
-                (m.geometry(tri, hit.uv[0], hit.uv[1]), m.props, None)
-            }
-        };
-        SurfaceInteraction {
-            p: g.p,
-            n: g.n,
-            ns: g.ns,
-            uv: g.uv,
-            dpdu: g.dpdu,
-            wo: -ray.d.normalize(),
-            t: hit.t,
-            prim: hit.prim,
-            props,
-            frame,
-        }
-    }
-}
 
 /// A scene ready to render.
 #[derive(Clone, Debug)]
@@ -243,7 +50,7 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         stats.rays += 1;
         let mut best = self.accel.intersect(&self.geometry, ray, stats);
-        if self.geometry.bounded == self.geometry.prim_count() {
+        if self.geometry.bounded_count() == self.geometry.prim_count() {
             return best;
         }
         // The unbounded primitives (planes, which ignore the sheared ray).
@@ -252,7 +59,7 @@ impl Scene {
         if let Some(b) = &best {
             r.tmax = b.t.next_up();
         }
-        for prim in self.geometry.bounded..self.geometry.prim_count() {
+        for prim in self.geometry.bounded_count()..self.geometry.prim_count() {
             stats.prim_tests += 1;
             if let Some(h) = self.geometry.intersect_prim(prim, &r, &sr) {
                 if crate::accel::closest(&mut best, h) {
@@ -268,7 +75,7 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray, stats: &mut RayStats) -> bool {
         stats.shadow_rays += 1;
         let sr = ShearedRay::unused();
-        (self.geometry.bounded..self.geometry.prim_count()).any(|p| {
+        (self.geometry.bounded_count()..self.geometry.prim_count()).any(|p| {
             stats.prim_tests += 1;
             self.geometry.intersect_prim(p, ray, &sr).is_some()
         }) || self.accel.occluded(&self.geometry, ray, stats)
@@ -460,6 +267,7 @@ impl SceneBuilder {
 mod tests {
     use super::*;
     use crate::shape::{Plane, Sphere};
+    use crate::texture::Texture;
 
     fn two_spheres_and_a_plane() -> Scene {
         let mut b = SceneBuilder::new();

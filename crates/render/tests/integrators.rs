@@ -3,11 +3,11 @@
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
 use candela_render::integrator::{Integrator, Path, Whitted};
+use candela_render::light::Emission;
 use candela_render::light::{Environment, Light};
 use candela_render::material::{Material, Model};
 use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::render::{render, RenderSettings};
-use candela_render::scene::Emission;
 use candela_render::shape::{Shape, Sphere};
 use candela_render::texture::Texture;
 use candela_render::{Image, Rgb, Scene, SceneBuilder};

@@ -6,6 +6,7 @@ mod radiosity_support;
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
 use candela_render::integrator::{IntegratorKind, IntegratorSettings, Path};
+use candela_render::light::Emission;
 use candela_render::light::{Components, Light, PointLight};
 use candela_render::material::Material;
 use candela_render::math::{Point3, Transform, Vec3};
@@ -13,7 +14,6 @@ use candela_render::radiosity::{
     CacheStatus, DisplayMode, FormFactorMatrix, FormFactorMethod, PatchInfo, Radiosity,
     RadiosityOptions, RadiosityOutbox, Side, SolverKind,
 };
-use candela_render::scene::Emission;
 use candela_render::shape::{Disk, Mesh, Shape, Sphere};
 use candela_render::texture::Texture;
 use candela_render::{Rgb, Scene, SceneBuilder};

@@ -6,13 +6,14 @@ use crate::error::{Pos, SceneError};
 use crate::lang::ast::{self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind};
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
+use candela_render::light::Emission;
 use candela_render::light::{
     Components, DistantLight, Environment, Falloff, HemisphereLight, Light, PointLight, SpotLight,
     SpotProfile,
 };
 use candela_render::material::{Distribution, Lobe, Material, MaterialId, Microfacet, Model};
 use candela_render::math::{Transform, Vec3};
-use candela_render::scene::{Emission, SceneBuilder};
+use candela_render::scene::SceneBuilder;
 use candela_render::shape::{
     Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polyhedron, Shape, Solid, Sphere,
 };

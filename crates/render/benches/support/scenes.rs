@@ -4,10 +4,10 @@
 //! and incoherent random rays.
 #![allow(dead_code)]
 
+use candela_render::geometry::{Geometry, Object};
 use candela_render::interaction::SurfaceProps;
 use candela_render::math::{Point3, Ray, Transform, Vec3};
 use candela_render::sampling::Pcg32;
-use candela_render::scene::{Geometry, Object};
 use candela_render::shape::{Cube, Mesh, Parallelogram, Shape, Sphere};
 
 /// A cube subdivided into `n`×`n` quads per face (12·n² triangles), pushed onto a sphere of

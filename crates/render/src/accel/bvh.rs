@@ -20,7 +20,7 @@
 //! per node). Below [`MEDIAN_DEPTH`] splits are by count, which bounds the depth and so the
 //! traversal stack (one per thread, kept between rays).
 //!
-//! Traversal: the eight boxes of a node are tested at once ([`super::simd`]: one AVX register,
+//! Traversal: the eight boxes of a node are tested at once ([`crate::simd`]: one AVX register,
 //! or two SSE ones), hit children are visited nearest entry first with the others on the stack
 //! with their entry distance; entries beyond the current closest hit are dropped when popped.
 //! Shadow rays take the nearest hit child next and the others in any order, and stop at the
@@ -37,12 +37,12 @@
 
 use rayon::prelude::*;
 
-use super::simd::{Isa, F4};
 use super::{closest, BuildPrim};
+use crate::geometry::{Geometry, PrimRef as GeomPrim};
 use crate::interaction::Hit;
 use crate::math::{Ray, GAMMA3};
-use crate::scene::{Geometry, PrimRef as GeomPrim};
 use crate::shape::ShearedRay;
+use crate::simd::{Isa, F4};
 use crate::stats::RayStats;
 
 /// Subtrees larger than this are built on separate threads.
@@ -305,13 +305,13 @@ impl Bvh {
     #[inline(always)]
     fn prefetch(&self, r: Ref) {
         if r.meta == 0 {
-            super::simd::prefetch(&self.nodes[r.child as usize]);
+            crate::simd::prefetch(&self.nodes[r.child as usize]);
         } else if r.meta & !COUNT_MASK == TRI_LEAF {
             let first = r.child as usize;
             let n = (r.meta & COUNT_MASK).div_ceil(4) as usize;
             if let Some(ts) = self.tris.get(first..first + n) {
                 for t in ts {
-                    super::simd::prefetch(t);
+                    crate::simd::prefetch(t);
                 }
             }
         }
@@ -326,14 +326,14 @@ impl Bvh {
             return if q.leaf(self, cur) { FOUND } else { 0 };
         }
         STACK_SPACE.with(|space| match space.try_borrow_mut() {
-            Ok(mut stack) => super::simd::run(Traversal {
+            Ok(mut stack) => crate::simd::run(Traversal {
                 bvh: self,
                 ray,
                 q,
                 stack: &mut stack,
             }),
             // Only reached if a leaf test traced rays through a BVH itself.
-            Err(_) => super::simd::run(Traversal {
+            Err(_) => crate::simd::run(Traversal {
                 bvh: self,
                 ray,
                 q,
@@ -454,7 +454,7 @@ impl Bvh {
     }
 }
 
-/// A traversal from an inner root, as a kernel for [`super::simd::run`].
+/// A traversal from an inner root, as a kernel for [`crate::simd::run`].
 struct Traversal<'a, Q> {
     bvh: &'a Bvh,
     ray: &'a Ray,
@@ -462,7 +462,7 @@ struct Traversal<'a, Q> {
     stack: &'a mut [(Ref, f32); STACK],
 }
 
-impl<Q: Query> super::simd::Kernel for Traversal<'_, Q> {
+impl<Q: Query> crate::simd::Kernel for Traversal<'_, Q> {
     type Output = u64;
 
     #[inline(always)]
@@ -1370,7 +1370,7 @@ mod tests {
             let (a, b) = (TriRay::new(&r, true).sr, ShearedRay::new(&r));
             assert_eq!(a.k, b.k);
             assert_eq!(a.s.map(f32::to_bits), b.s.map(f32::to_bits), "{r:?}");
-            let rb = RayBox::new(&r, super::super::simd::Sse);
+            let rb = RayBox::new(&r, crate::simd::Sse);
             let inv = rb.inv.map(|x| x[0].to_array()[0]);
             assert_eq!(
                 inv.map(f32::to_bits),

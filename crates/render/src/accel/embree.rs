@@ -17,9 +17,9 @@
 use std::ffi::{c_char, c_void, CString};
 
 use super::{build_prims, closest, inflate, margin, BuildPrim, Bvh};
+use crate::geometry::{Geometry, PrimRef};
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray};
-use crate::scene::{Geometry, PrimRef};
 use crate::stats::RayStats;
 
 type RtcDevice = *mut c_void;
@@ -323,9 +323,9 @@ impl Embree {
 mod tests {
     use super::super::test_scenes::parallelogram_scene;
     use super::super::{Accel, AccelKind};
+    use crate::geometry::Geometry;
     use crate::math::{Point3, Ray, Vec3};
     use crate::sampling::Pcg32;
-    use crate::scene::Geometry;
     use crate::shape::Mesh;
     use crate::stats::RayStats;
 

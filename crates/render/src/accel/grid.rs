@@ -36,9 +36,9 @@ use super::{
     clip, inflate, inv_dir, margin, t_limit, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
     ClosestVisitor,
 };
+use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray, Vec3};
-use crate::scene::Geometry;
 use crate::stats::RayStats;
 
 /// Target number of cells per primitive (λ).

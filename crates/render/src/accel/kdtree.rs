@@ -41,9 +41,9 @@ use super::{
     clip, inflate, inv_dir, margin, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
     ClosestVisitor,
 };
+use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray};
-use crate::scene::Geometry;
 use crate::stats::RayStats;
 
 /// Cost of a ray–primitive test.

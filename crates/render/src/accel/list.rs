@@ -1,8 +1,8 @@
 //! The linear list (`--accel none`): tests every primitive.
 
+use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::Ray;
-use crate::scene::Geometry;
 use crate::shape::ShearedRay;
 use crate::stats::RayStats;
 

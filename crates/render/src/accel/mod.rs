@@ -2,7 +2,7 @@
 //!
 //! Every structure answers the same two queries, closest hit and any hit, and returns exactly
 //! what the linear list returns: each calls the one intersection routine of a primitive type
-//! ([`crate::scene::Geometry::intersect_prim`]) and breaks ties in `t` by primitive id.
+//! ([`crate::geometry::Geometry::intersect_prim`]) and breaks ties in `t` by primitive id.
 //! Unbounded primitives (planes) are kept outside and tested by the scene.
 //!
 //! The spatial subdivisions ([`KdTree`], [`Grid`], [`Octree`]) reference a primitive from every
@@ -17,7 +17,7 @@
 //! smaller primitive id. A recently tested primitive is not tested again (a small mailbox).
 //!
 //! The [`Bvh`] (the default) is the fast one: 8-wide nodes and blocks of four triangles tested
-//! with SIMD ([`simd`], AVX2 chosen at run time). With the cargo feature `embree`, Intel
+//! with SIMD ([`crate::simd`], AVX2 chosen at run time). With the cargo feature `embree`, Intel
 //! Embree 3 is available too ([`AccelKind::Embree`]) for comparisons; it is not bit-identical.
 
 mod bvh;
@@ -27,7 +27,6 @@ mod grid;
 mod kdtree;
 mod list;
 mod octree;
-pub(crate) mod simd;
 
 pub use bvh::{Bvh, BvhNode};
 #[cfg(feature = "embree")]
@@ -37,9 +36,9 @@ pub use kdtree::{KdNode, KdTree};
 pub use list::List;
 pub use octree::{Octree, OctreeNode};
 
+use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Point3, Ray, Vec3};
-use crate::scene::Geometry;
 use crate::shape::ShearedRay;
 use crate::stats::RayStats;
 
@@ -510,10 +509,10 @@ impl Accel {
 #[cfg(test)]
 pub(crate) mod test_scenes {
     use super::List;
+    use crate::geometry::{Geometry, Object};
     use crate::interaction::{Hit, SurfaceProps};
     use crate::math::{Point3, Ray, Transform, Vec3};
     use crate::sampling::Pcg32;
-    use crate::scene::{Geometry, Object};
     use crate::shape::{Mesh, Parallelogram, Shape, Sphere};
     use crate::stats::RayStats;
 

@@ -22,9 +22,9 @@ use super::{
     clip, inflate, inv_dir, margin, t_limit, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
     ClosestVisitor,
 };
+use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Point3, Ray};
-use crate::scene::Geometry;
 use crate::stats::RayStats;
 
 /// A node is split when it holds more primitives than this.

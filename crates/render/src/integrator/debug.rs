@@ -66,9 +66,10 @@ impl Integrator for Depth {
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
+    use crate::light::Emission;
     use crate::material::Material;
     use crate::math::{Point3, Transform, Vec3};
-    use crate::scene::{Emission, SceneBuilder};
+    use crate::scene::SceneBuilder;
     use crate::shape::{Shape, Sphere};
     use crate::texture::Texture;
 

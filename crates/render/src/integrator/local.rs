@@ -119,10 +119,11 @@ pub fn shade(
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
+    use crate::light::Emission;
     use crate::light::{Components, Falloff, PointLight};
     use crate::material::Material;
     use crate::math::{Point3, Transform};
-    use crate::scene::{Emission, SceneBuilder};
+    use crate::scene::SceneBuilder;
     use crate::shape::{Shape, Sphere};
     use crate::texture::Texture;
 

@@ -78,9 +78,10 @@ impl Whitted {
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
+    use crate::light::Emission;
     use crate::material::{Material, Model};
     use crate::math::{Point3, Transform, Vec3};
-    use crate::scene::{Emission, SceneBuilder};
+    use crate::scene::SceneBuilder;
     use crate::shape::{Shape, Sphere};
     use crate::texture::Texture;
 

@@ -6,11 +6,12 @@
 //! in proportion to their area, which for a uniform emitter is their power). Planes, polyhedra
 //! and CSG emit but are not sampled: paths find them by BSDF sampling alone.
 
+use super::Emission;
 use super::{LightSample, Target};
 use crate::color::Rgb;
+use crate::geometry::Geometry;
 use crate::math::{Normal3, Point3, Vec3, PI};
 use crate::sampling::{warp, Distribution1D};
-use crate::scene::{Emission, Geometry};
 use crate::shape::{Cube, Disk, LocalGeometry, Mesh, Parallelogram, Sphere};
 
 /// The sampleable shape of an area light.

@@ -10,16 +10,18 @@
 //!   sampling.
 
 mod area;
+mod emission;
 mod infinite;
 mod point;
 
 pub use area::{AreaLight, AreaShape};
+pub use emission::Emission;
 pub use infinite::{Environment, HemisphereLight};
 pub use point::{Falloff, PointLight, SpotLight, SpotProfile};
 
 use crate::color::Rgb;
+use crate::geometry::Geometry;
 use crate::math::{Normal3, Point3, Vec3};
-use crate::scene::{Emission, Geometry};
 
 /// The lecture's separate ambient, diffuse and specular intensities of a light.
 #[derive(Clone, Copy, Debug, PartialEq)]

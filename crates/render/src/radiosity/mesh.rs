@@ -23,12 +23,13 @@
 
 use super::NONE;
 use crate::color::Rgb;
+use crate::geometry::PrimRef;
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::material::{Material, Model};
 use crate::math::{Bounds3, Frame, Normal3, Point2, Point3, Ray, Transform, Vec3, PI};
 use crate::sampling::sampler::cmj;
 use crate::sampling::warp;
-use crate::scene::{PrimRef, Scene};
+use crate::scene::Scene;
 use crate::shape::{Cube, Shape, Sphere};
 use crate::stats::RayStats;
 

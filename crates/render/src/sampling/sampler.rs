@@ -232,7 +232,7 @@ impl Sampler {
         let n = (self.spp.saturating_sub(self.chunk) as usize).clamp(j + 1, CHUNK);
         self.batched |= 1 << d;
         self.batch_from[d] = j as u8;
-        crate::accel::simd::run(Batch {
+        crate::simd::run(Batch {
             out: &mut self.batch[d][j..n],
             first: self.chunk + j as u32,
             seeds: s,
@@ -313,7 +313,7 @@ impl Sampler {
 }
 
 /// The pairs of one dimension for consecutive samples, as a kernel for
-/// [`crate::accel::simd::run`]: the same numbers as [`Sampler::next_2d`] computes one at a
+/// [`crate::simd::run`]: the same numbers as [`Sampler::next_2d`] computes one at a
 /// time, but with independent samples side by side (vectorised), and off the path's
 /// critical chain.
 struct Batch<'a> {
@@ -323,11 +323,11 @@ struct Batch<'a> {
     seeds: DimSeeds,
 }
 
-impl crate::accel::simd::Kernel for Batch<'_> {
+impl crate::simd::Kernel for Batch<'_> {
     type Output = ();
 
     #[inline(always)]
-    fn run<I: crate::accel::simd::Isa>(self, _: I) {
+    fn run<I: crate::simd::Isa>(self, _: I) {
         let s = self.seeds;
         for (k, p) in self.out.iter_mut().enumerate() {
             let index = self.first.wrapping_add(k as u32);

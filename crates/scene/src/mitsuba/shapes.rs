@@ -17,8 +17,8 @@ use super::math::M4;
 use super::xml::Element;
 use super::Loader;
 use crate::error::SceneError;
+use candela_render::light::Emission;
 use candela_render::math::{Normal3, Point2, Point3, Transform, Vec3};
-use candela_render::scene::Emission;
 use candela_render::shape::{Cube, Disk, Mesh, Parallelogram, Shape, Sphere};
 use std::sync::Arc;
 
