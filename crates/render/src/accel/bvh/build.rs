@@ -1,0 +1,580 @@
+//! The BVH build (Wald 2007; Embree): binned SAH over primitive centroids, nodes widened to
+//! eight children, large subtrees in parallel.
+
+use rayon::prelude::*;
+
+use super::layout::{BvhNode, Ref, COUNT_MASK, MEDIAN_DEPTH, OBJ_LEAF, TRI_LEAF, W};
+use super::Bvh;
+use crate::accel::BuildPrim;
+use crate::geometry::{Geometry, PrimRef as GeomPrim};
+
+/// Subtrees larger than this are built on separate threads.
+pub(super) const PARALLEL_THRESHOLD: usize = 8192;
+/// Ranges larger than this are binned on several threads.
+const PARALLEL_BINNING: usize = 65536;
+/// Number of centroid bins per axis.
+const BINS: usize = 16;
+/// Largest triangle leaf (four blocks).
+const MAX_TRI_LEAF: usize = 16;
+/// Largest leaf of other primitives.
+const MAX_OBJ_LEAF: usize = 4;
+/// Cost of a node visit relative to testing one block of triangles.
+const TRAVERSAL_COST: f32 = 0.5;
+/// Cost of testing one primitive other than a triangle.
+const OBJ_COST: f32 = 2.0;
+
+impl BvhNode {
+    /// Sets child `i` to `r` with box `b`.
+    fn set(&mut self, i: usize, b: &Aabb, r: Ref) {
+        for a in 0..3 {
+            self.b[a][i] = b.lo[a];
+            self.b[a + 3][i] = b.hi[a];
+        }
+        self.child[i] = r.child;
+        self.meta[i] = r.meta;
+    }
+}
+
+impl Bvh {
+    /// Builds over `prims` (boxes and ids) of `geometry`.
+    pub fn build(geometry: &Geometry, prims: &[BuildPrim]) -> Self {
+        let mut refs: Vec<PrimRef> = if prims.len() > PARALLEL_BINNING {
+            prims
+                .par_iter()
+                .map(|p| PrimRef::new(p, geometry))
+                .collect()
+        } else {
+            prims.iter().map(|p| PrimRef::new(p, geometry)).collect()
+        };
+        Self::build_refs(geometry, &mut refs)
+    }
+
+    fn build_refs(geometry: &Geometry, refs: &mut [PrimRef]) -> Self {
+        if refs.is_empty() {
+            return Self::default();
+        }
+        let info = Info::of(refs);
+        let mut nodes = Vec::with_capacity(refs.len() / 4);
+        let root = build_node(refs, 0, &info, 0, &mut nodes);
+        let ids: Vec<u32> = refs.iter().map(|p| p.id()).collect();
+        let mut bvh = Self {
+            nodes,
+            root,
+            tris: Vec::new(),
+            ids,
+        };
+        bvh.pack_triangles(geometry);
+        bvh
+    }
+}
+
+/// A primitive during the build: its box, with the id in the fourth lane of `lo` and the
+/// kind (1: triangle) in the fourth lane of `hi`, as bits.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct PrimRef {
+    lo: [f32; 4],
+    hi: [f32; 4],
+}
+
+impl PrimRef {
+    fn new(p: &BuildPrim, geometry: &Geometry) -> Self {
+        let tri = matches!(geometry.prim(p.id), GeomPrim::Triangle { .. });
+        let (l, h) = (p.bounds.min, p.bounds.max);
+        Self {
+            lo: [l.x, l.y, l.z, f32::from_bits(p.id)],
+            hi: [h.x, h.y, h.z, f32::from_bits(tri as u32)],
+        }
+    }
+
+    #[inline(always)]
+    fn id(&self) -> u32 {
+        self.lo[3].to_bits()
+    }
+
+    #[inline(always)]
+    fn is_tri(&self) -> bool {
+        self.hi[3].to_bits() != 0
+    }
+
+    /// Twice the centroid.
+    #[inline(always)]
+    fn centroid2(&self) -> [f32; 4] {
+        [
+            self.lo[0] + self.hi[0],
+            self.lo[1] + self.hi[1],
+            self.lo[2] + self.hi[2],
+            0.0,
+        ]
+    }
+}
+
+/// A box as four lanes (the fourth unused).
+#[derive(Clone, Copy, Debug)]
+struct Aabb {
+    lo: [f32; 4],
+    hi: [f32; 4],
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb {
+        lo: [f32::INFINITY; 4],
+        hi: [f32::NEG_INFINITY; 4],
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, lo: &[f32; 4], hi: &[f32; 4]) {
+        for i in 0..4 {
+            self.lo[i] = if lo[i] < self.lo[i] {
+                lo[i]
+            } else {
+                self.lo[i]
+            };
+            self.hi[i] = if hi[i] > self.hi[i] {
+                hi[i]
+            } else {
+                self.hi[i]
+            };
+        }
+    }
+
+    #[inline(always)]
+    fn grow_point(&mut self, p: &[f32; 4]) {
+        self.grow(p, p);
+    }
+
+    #[inline(always)]
+    fn union(mut self, o: &Aabb) -> Aabb {
+        self.grow(&o.lo, &o.hi);
+        self
+    }
+
+    /// Half the surface area (0 when empty).
+    #[inline(always)]
+    fn half_area(&self) -> f32 {
+        let d = [
+            self.hi[0] - self.lo[0],
+            self.hi[1] - self.lo[1],
+            self.hi[2] - self.lo[2],
+        ];
+        if d[0] < 0.0 {
+            return 0.0;
+        }
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    }
+}
+
+/// What the build knows about a range: its box, the box of its (doubled) centroids and its
+/// number of triangles.
+#[derive(Clone, Copy, Debug)]
+struct Info {
+    b: Aabb,
+    c: Aabb,
+    n: usize,
+    tris: usize,
+}
+
+impl Info {
+    const EMPTY: Info = Info {
+        b: Aabb::EMPTY,
+        c: Aabb::EMPTY,
+        n: 0,
+        tris: 0,
+    };
+
+    #[inline(always)]
+    fn add(&mut self, p: &PrimRef) {
+        self.b.grow(&p.lo, &p.hi);
+        self.c.grow_point(&p.centroid2());
+        self.n += 1;
+        self.tris += p.is_tri() as usize;
+    }
+
+    fn merge(mut self, o: &Info) -> Info {
+        self.b = self.b.union(&o.b);
+        self.c = self.c.union(&o.c);
+        self.n += o.n;
+        self.tris += o.tris;
+        self
+    }
+
+    fn of(prims: &[PrimRef]) -> Info {
+        if prims.len() > PARALLEL_BINNING {
+            prims
+                .par_chunks(PARALLEL_BINNING / 4)
+                .map(Info::of)
+                .reduce(|| Info::EMPTY, |a, b| a.merge(&b))
+        } else {
+            let mut i = Info::EMPTY;
+            for p in prims {
+                i.add(p);
+            }
+            i
+        }
+    }
+
+    fn pure_triangles(&self) -> bool {
+        self.tris == self.n
+    }
+
+    fn mixed(&self) -> bool {
+        self.tris != 0 && self.tris != self.n
+    }
+
+    fn max_leaf(&self) -> usize {
+        if self.pure_triangles() {
+            MAX_TRI_LEAF
+        } else {
+            MAX_OBJ_LEAF
+        }
+    }
+}
+
+/// The cost of intersecting `n` primitives of a range: blocks of four for triangles,
+/// [`OBJ_COST`] for each other primitive.
+#[inline(always)]
+fn prim_cost(n: usize, triangles: bool) -> f32 {
+    if triangles {
+        n.div_ceil(4) as f32
+    } else {
+        n as f32 * OBJ_COST
+    }
+}
+
+/// Per-axis centroid bins.
+#[derive(Clone, Copy)]
+struct Bins {
+    b: [[Aabb; BINS]; 3],
+    n: [[u32; BINS]; 3],
+}
+
+impl Bins {
+    fn new() -> Self {
+        Self {
+            b: [[Aabb::EMPTY; BINS]; 3],
+            n: [[0; BINS]; 3],
+        }
+    }
+
+    fn merge(mut self, o: &Bins) -> Bins {
+        for a in 0..3 {
+            for i in 0..BINS {
+                self.b[a][i] = self.b[a][i].union(&o.b[a][i]);
+                self.n[a][i] += o.n[a][i];
+            }
+        }
+        self
+    }
+}
+
+/// Maps doubled centroids to bins.
+#[derive(Clone, Copy)]
+struct Binner {
+    lo: [f32; 4],
+    scale: [f32; 4],
+}
+
+impl Binner {
+    fn new(c: &Aabb) -> Self {
+        let mut scale = [0.0; 4];
+        for a in 0..3 {
+            let ext = c.hi[a] - c.lo[a];
+            if ext > 0.0 {
+                scale[a] = BINS as f32 * 0.999_99 / ext;
+            }
+        }
+        Self { lo: c.lo, scale }
+    }
+
+    #[inline(always)]
+    fn bins(&self, p: &PrimRef) -> [usize; 3] {
+        let c = p.centroid2();
+        let mut r = [0usize; 3];
+        for a in 0..3 {
+            r[a] = (((c[a] - self.lo[a]) * self.scale[a]) as usize).min(BINS - 1);
+        }
+        r
+    }
+
+    #[inline(always)]
+    fn bin(&self, p: &PrimRef, a: usize) -> usize {
+        let c = p.lo[a] + p.hi[a];
+        (((c - self.lo[a]) * self.scale[a]) as usize).min(BINS - 1)
+    }
+
+    fn fill(&self, prims: &[PrimRef]) -> Bins {
+        if prims.len() > PARALLEL_BINNING {
+            return prims
+                .par_chunks(PARALLEL_BINNING / 4)
+                .map(|c| self.fill(c))
+                .reduce(Bins::new, |a, b| a.merge(&b));
+        }
+        let mut bins = Bins::new();
+        for p in prims {
+            let ix = self.bins(p);
+            for a in 0..3 {
+                bins.b[a][ix[a]].grow(&p.lo, &p.hi);
+                bins.n[a][ix[a]] += 1;
+            }
+        }
+        bins
+    }
+}
+
+/// A split of a range: the left part's size and the two parts' infos.
+type Split = (usize, Info, Info);
+
+/// Splits `prims` in two, or `None` for a leaf.
+fn split(prims: &mut [PrimRef], info: &Info, depth: u32) -> Option<Split> {
+    let n = prims.len();
+    if n <= 1 {
+        return None;
+    }
+    let small = n <= info.max_leaf();
+    if info.mixed() && n <= MAX_TRI_LEAF {
+        // Leaves are never mixed: triangles first.
+        return Some(partition(prims, |p| p.is_tri()));
+    }
+    if depth >= MEDIAN_DEPTH {
+        return (!small || info.mixed()).then(|| median_split(prims, info));
+    }
+    let binner = Binner::new(&info.c);
+    if binner.scale[..3].iter().all(|&s| s == 0.0) {
+        // All centroids coincide.
+        return (!small || info.mixed()).then(|| median_split(prims, info));
+    }
+    let tri = info.pure_triangles();
+    let bins = binner.fill(prims);
+    // Best over axes of the unnormalised SAH cost: A_L·C(L) + A_R·C(R).
+    let mut best = (f32::INFINITY, 0usize, 0usize);
+    for a in 0..3 {
+        if binner.scale[a] == 0.0 {
+            continue;
+        }
+        let mut right = [0f32; BINS];
+        let (mut acc, mut cnt) = (Aabb::EMPTY, 0usize);
+        for i in (1..BINS).rev() {
+            acc = acc.union(&bins.b[a][i]);
+            cnt += bins.n[a][i] as usize;
+            right[i] = acc.half_area() * prim_cost(cnt, tri);
+        }
+        let (mut acc, mut cnt) = (Aabb::EMPTY, 0usize);
+        for i in 1..BINS {
+            acc = acc.union(&bins.b[a][i - 1]);
+            cnt += bins.n[a][i - 1] as usize;
+            if cnt == 0 || cnt == n {
+                continue;
+            }
+            let cost = acc.half_area() * prim_cost(cnt, tri) + right[i];
+            if cost < best.0 {
+                best = (cost, a, i);
+            }
+        }
+    }
+    let area = info.b.half_area();
+    let leaf_cost = area * prim_cost(n, tri);
+    let split_cost = area * TRAVERSAL_COST + best.0;
+    if !best.0.is_finite() {
+        return (!small || info.mixed()).then(|| median_split(prims, info));
+    }
+    if small && !info.mixed() && leaf_cost <= split_cost {
+        return None;
+    }
+    let (a, s) = (best.1, best.2);
+    Some(partition(prims, |p| binner.bin(p, a) < s))
+}
+
+/// Halves by count along the axis of largest centroid extent.
+fn median_split(prims: &mut [PrimRef], info: &Info) -> Split {
+    let n = prims.len();
+    let mut axis = 0;
+    for a in 1..3 {
+        if info.c.hi[a] - info.c.lo[a] > info.c.hi[axis] - info.c.lo[axis] {
+            axis = a;
+        }
+    }
+    let key = |p: &PrimRef| p.lo[axis] + p.hi[axis];
+    prims.select_nth_unstable_by(n / 2, |x, y| key(x).total_cmp(&key(y)));
+    let (l, r) = prims.split_at(n / 2);
+    (n / 2, Info::of(l), Info::of(r))
+}
+
+/// Reorders so that the elements satisfying `left` come first; returns how many do and the
+/// infos of both parts.
+fn partition(prims: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> Split {
+    let (mut li, mut ri) = (Info::EMPTY, Info::EMPTY);
+    let (mut i, mut j) = (0usize, prims.len());
+    loop {
+        while i < j && left(&prims[i]) {
+            li.add(&prims[i]);
+            i += 1;
+        }
+        while i < j && !left(&prims[j - 1]) {
+            ri.add(&prims[j - 1]);
+            j -= 1;
+        }
+        if i >= j {
+            break;
+        }
+        prims.swap(i, j - 1);
+        li.add(&prims[i]);
+        ri.add(&prims[j - 1]);
+        i += 1;
+        j -= 1;
+    }
+    (i, li, ri)
+}
+
+/// A child of a node being built: a sub-range and whether it is a finished leaf.
+#[derive(Clone, Copy)]
+struct Kid {
+    start: usize,
+    end: usize,
+    info: Info,
+    leaf: bool,
+}
+
+/// The leaf over `prims[offset..offset + n]` (the primitive range; packed into blocks later).
+fn leaf(offset: usize, info: &Info) -> Ref {
+    debug_assert!(!info.mixed() && info.n <= COUNT_MASK as usize);
+    Ref {
+        child: offset as u32,
+        meta: if info.pure_triangles() {
+            TRI_LEAF
+        } else {
+            OBJ_LEAF
+        } | info.n as u32,
+    }
+}
+
+/// Builds the subtree over `prims` (at `offset` in the final order), appending its nodes to
+/// `nodes`; returns its reference.
+fn build_node(
+    prims: &mut [PrimRef],
+    offset: usize,
+    info: &Info,
+    depth: u32,
+    nodes: &mut Vec<BvhNode>,
+) -> Ref {
+    let Some((mid, li, ri)) = split(prims, info, depth) else {
+        return leaf(offset, info);
+    };
+    let n = prims.len();
+    let mut kids = [Kid {
+        start: 0,
+        end: 0,
+        info: Info::EMPTY,
+        leaf: true,
+    }; W];
+    kids[0] = Kid {
+        start: 0,
+        end: mid,
+        info: li,
+        leaf: false,
+    };
+    kids[1] = Kid {
+        start: mid,
+        end: n,
+        info: ri,
+        leaf: false,
+    };
+    let mut count = 2;
+    while count < W {
+        // Split the open child of largest area (of most primitives once splits are by count).
+        let mut pick = None;
+        let mut best_area = -1.0;
+        for (i, k) in kids[..count].iter().enumerate() {
+            let a = if depth + 1 >= MEDIAN_DEPTH {
+                k.info.n as f32
+            } else {
+                k.info.b.half_area()
+            };
+            if !k.leaf && a > best_area {
+                best_area = a;
+                pick = Some(i);
+            }
+        }
+        let Some(i) = pick else { break };
+        let k = kids[i];
+        match split(&mut prims[k.start..k.end], &k.info, depth + 1) {
+            None => kids[i].leaf = true,
+            Some((m, li, ri)) => {
+                kids.copy_within(i + 1..count, i + 2);
+                kids[i] = Kid {
+                    start: k.start,
+                    end: k.start + m,
+                    info: li,
+                    leaf: false,
+                };
+                kids[i + 1] = Kid {
+                    start: k.start + m,
+                    end: k.end,
+                    info: ri,
+                    leaf: false,
+                };
+                count += 1;
+            }
+        }
+    }
+    let me = nodes.len();
+    nodes.push(BvhNode::EMPTY);
+    let mut node = BvhNode::EMPTY;
+    if n > PARALLEL_THRESHOLD {
+        let mut parts: Vec<(&mut [PrimRef], Kid)> = Vec::with_capacity(W);
+        let mut rest = prims;
+        let mut pos = 0;
+        for k in &kids[..count] {
+            let (part, tail) = rest.split_at_mut(k.end - pos);
+            parts.push((part, *k));
+            rest = tail;
+            pos = k.end;
+        }
+        let built: Vec<(Vec<BvhNode>, Ref)> = parts
+            .into_par_iter()
+            .map(|(part, k)| {
+                let mut sub = Vec::new();
+                let r = if k.leaf {
+                    leaf(offset + k.start, &k.info)
+                } else {
+                    build_node(part, offset + k.start, &k.info, depth + 1, &mut sub)
+                };
+                (sub, r)
+            })
+            .collect();
+        for (i, (sub, mut r)) in built.into_iter().enumerate() {
+            let base = nodes.len() as u32;
+            if r.meta == 0 {
+                r.child += base;
+            }
+            nodes.extend(sub.into_iter().map(|mut nd| {
+                for j in 0..W {
+                    if nd.meta[j] == 0 {
+                        nd.child[j] += base;
+                    }
+                }
+                nd
+            }));
+            node.set(i, &kids[i].info.b, r);
+        }
+    } else {
+        for (i, k) in kids[..count].iter().enumerate() {
+            let r = if k.leaf {
+                leaf(offset + k.start, &k.info)
+            } else {
+                build_node(
+                    &mut prims[k.start..k.end],
+                    offset + k.start,
+                    &k.info,
+                    depth + 1,
+                    nodes,
+                )
+            };
+            node.set(i, &k.info.b, r);
+        }
+    }
+    nodes[me] = node;
+    Ref {
+        child: me as u32,
+        meta: 0,
+    }
+}

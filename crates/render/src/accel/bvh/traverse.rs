@@ -1,0 +1,529 @@
+//! BVH traversal: the eight child boxes of a node tested at once, nearest child first for
+//! closest hits, any order for shadow rays; leaves of triangles tested four at a time.
+
+use super::layout::{BvhNode, Ref, Tri4, COUNT_MASK, STACK, TRI_LEAF, W};
+use super::Bvh;
+use crate::accel::closest;
+use crate::geometry::Geometry;
+use crate::interaction::Hit;
+use crate::math::{Ray, GAMMA3};
+use crate::shape::ShearedRay;
+use crate::simd::{Isa, F4};
+use crate::stats::RayStats;
+
+/// The far distance of a box grows by 2γ₃ (pbrt) to cover round-off.
+const FAR_SCALE: f32 = 1.0 + 2.0 * GAMMA3;
+
+impl Bvh {
+    /// The closest hit.
+    pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        let mut q = ClosestQuery {
+            geometry,
+            ray: *ray,
+            tri: TriRay::new(ray, !self.tris.is_empty()),
+            best: None,
+            tests: 0,
+        };
+        let visited = self.traverse(ray, &mut q);
+        stats.nodes += visited;
+        stats.prim_tests += q.tests;
+        q.best
+    }
+
+    /// True when any primitive is hit.
+    pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
+        let mut q = AnyQuery {
+            geometry,
+            ray,
+            tri: TriRay::new(ray, !self.tris.is_empty()),
+            tests: 0,
+        };
+        let visited = self.traverse(ray, &mut q);
+        stats.nodes += visited & !FOUND;
+        stats.prim_tests += q.tests;
+        visited & FOUND != 0
+    }
+
+    /// Starts loading what `r` refers to (it will be visited later, unless culled).
+    #[inline(always)]
+    fn prefetch(&self, r: Ref) {
+        if r.meta == 0 {
+            crate::simd::prefetch(&self.nodes[r.child as usize]);
+        } else if r.meta & !COUNT_MASK == TRI_LEAF {
+            let first = r.child as usize;
+            let n = (r.meta & COUNT_MASK).div_ceil(4) as usize;
+            if let Some(ts) = self.tris.get(first..first + n) {
+                for t in ts {
+                    crate::simd::prefetch(t);
+                }
+            }
+        }
+    }
+
+    /// Visits the leaves whose boxes the ray crosses, nearest child first. Returns the number
+    /// of nodes visited, with [`FOUND`] set when `q` stopped the traversal.
+    #[inline(always)]
+    fn traverse<Q: Query>(&self, ray: &Ray, q: &mut Q) -> u64 {
+        let cur = self.root;
+        if cur.meta != 0 {
+            return if q.leaf(self, cur) { FOUND } else { 0 };
+        }
+        STACK_SPACE.with(|space| match space.try_borrow_mut() {
+            Ok(mut stack) => crate::simd::run(Traversal {
+                bvh: self,
+                ray,
+                q,
+                stack: &mut stack,
+            }),
+            // Only reached if a leaf test traced rays through a BVH itself.
+            Err(_) => crate::simd::run(Traversal {
+                bvh: self,
+                ray,
+                q,
+                stack: &mut [(Ref::EMPTY, 0.0); STACK],
+            }),
+        })
+    }
+
+    /// [`Bvh::traverse`] from an inner root, with a stack.
+    #[inline(always)]
+    fn traverse_from<Q: Query, I: Isa>(
+        &self,
+        ray: &Ray,
+        q: &mut Q,
+        stack: &mut [(Ref, f32); STACK],
+        isa: I,
+    ) -> u64 {
+        let mut cur = self.root;
+        let rb = RayBox::new(ray, isa);
+        let mut sp = 0usize;
+        let mut visited = 0u64;
+        loop {
+            if cur.meta == 0 {
+                // An inner node: test the children's boxes.
+                visited += 1;
+                let node = &self.nodes[cur.child as usize];
+                let (mut mask, dist) = rb.test(node, ray.tmin, q.tmax());
+                if mask != 0 {
+                    let r = |i: usize| Ref {
+                        child: node.child[i],
+                        meta: node.meta[i],
+                    };
+                    let c0 = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = r(c0);
+                        self.prefetch(cur);
+                        continue;
+                    }
+                    if !Q::ORDERED {
+                        // The nearest next, the others on the stack in any order.
+                        let mut near = c0;
+                        while mask != 0 {
+                            let c = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            let (keep, push) = if dist[c] < dist[near] {
+                                (c, near)
+                            } else {
+                                (near, c)
+                            };
+                            stack[sp] = (r(push), dist[push]);
+                            self.prefetch(r(push));
+                            sp += 1;
+                            near = keep;
+                        }
+                        cur = r(near);
+                        self.prefetch(cur);
+                        continue;
+                    }
+                    let c1 = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        // Two: the nearer next, the other on the stack (without a branch).
+                        let swap = (dist[c1] < dist[c0]) as usize;
+                        let pair = [c0, c1];
+                        let (near, far) = (pair[swap], pair[1 - swap]);
+                        stack[sp] = (r(far), dist[far]);
+                        self.prefetch(r(far));
+                        cur = r(near);
+                        self.prefetch(cur);
+                        sp += 1;
+                        continue;
+                    }
+                    // More: push all, sort the new entries by decreasing distance, continue
+                    // with the nearest.
+                    let base = sp;
+                    stack[sp] = (r(c0), dist[c0]);
+                    stack[sp + 1] = (r(c1), dist[c1]);
+                    sp += 2;
+                    while mask != 0 {
+                        let c = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack[sp] = (r(c), dist[c]);
+                        sp += 1;
+                    }
+                    for e in &stack[base..sp] {
+                        self.prefetch(e.0);
+                    }
+                    for i in base + 1..sp {
+                        let e = stack[i];
+                        let mut j = i;
+                        while j > base && stack[j - 1].1 < e.1 {
+                            stack[j] = stack[j - 1];
+                            j -= 1;
+                        }
+                        stack[j] = e;
+                    }
+                    sp -= 1;
+                    cur = stack[sp].0;
+                    continue;
+                }
+            } else if q.leaf(self, cur) {
+                return visited | FOUND;
+            }
+            // Pop the next entry still in reach.
+            loop {
+                if sp == 0 {
+                    return visited;
+                }
+                sp -= 1;
+                let (r, d) = stack[sp];
+                if d <= q.tmax() * FAR_SCALE {
+                    cur = r;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// A traversal from an inner root, as a kernel for [`crate::simd::run`].
+struct Traversal<'a, Q> {
+    bvh: &'a Bvh,
+    ray: &'a Ray,
+    q: &'a mut Q,
+    stack: &'a mut [(Ref, f32); STACK],
+}
+
+impl<Q: Query> crate::simd::Kernel for Traversal<'_, Q> {
+    type Output = u64;
+
+    #[inline(always)]
+    fn run<I: Isa>(self, isa: I) -> u64 {
+        self.bvh.traverse_from(self.ray, self.q, self.stack, isa)
+    }
+}
+
+/// Set in the visit count returned by [`Bvh::traverse`] when the query stopped it.
+const FOUND: u64 = 1 << 63;
+
+thread_local! {
+    /// The traversal stack of each thread (kept, so that it is not cleared for every ray).
+    static STACK_SPACE: std::cell::RefCell<[(Ref, f32); STACK]> =
+        const { std::cell::RefCell::new([(Ref::EMPTY, 0.0); STACK]) };
+}
+
+/// What a traversal does at leaves.
+trait Query {
+    /// Whether children are visited nearest first (any-hit queries need not).
+    const ORDERED: bool;
+    /// Tests a leaf's primitives; true to stop.
+    fn leaf(&mut self, bvh: &Bvh, r: Ref) -> bool;
+    /// The far end of the ray.
+    fn tmax(&self) -> f32;
+}
+
+struct ClosestQuery<'a> {
+    geometry: &'a Geometry,
+    /// The ray, its `tmax` one ULP above the best hit.
+    ray: Ray,
+    tri: TriRay,
+    best: Option<Hit>,
+    tests: u64,
+}
+
+impl Query for ClosestQuery<'_> {
+    const ORDERED: bool = true;
+
+    #[inline(always)]
+    fn leaf(&mut self, bvh: &Bvh, r: Ref) -> bool {
+        let n = r.meta & COUNT_MASK;
+        self.tests += n as u64;
+        let first = r.child as usize;
+        if r.meta & !COUNT_MASK == TRI_LEAF {
+            for (k, t) in bvh.tris[first..first + n.div_ceil(4) as usize]
+                .iter()
+                .enumerate()
+            {
+                let h = self.tri.test(t, self.ray.tmin, self.ray.tmax, lanes(n, k));
+                let mut mask = h.mask;
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let (t_hit, id) = (h.t[i], t.id[i]);
+                    let better = match &self.best {
+                        None => true,
+                        Some(b) => t_hit < b.t || (t_hit == b.t && id < b.prim),
+                    };
+                    if better {
+                        self.best = Some(Hit {
+                            t: t_hit,
+                            prim: id,
+                            uv: [h.v[i] * h.inv_det[i], h.w[i] * h.inv_det[i]],
+                            sub: 0,
+                            leaf: 0,
+                        });
+                        self.ray.tmax = t_hit.next_up();
+                    }
+                }
+            }
+        } else {
+            let sr = &self.tri.sr;
+            for &id in &bvh.ids[first..first + n as usize] {
+                if let Some(h) = self.geometry.intersect_prim(id, &self.ray, sr) {
+                    if closest(&mut self.best, h) {
+                        self.ray.tmax = h.t.next_up();
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    #[inline(always)]
+    fn tmax(&self) -> f32 {
+        self.ray.tmax
+    }
+}
+
+/// The lanes in use in block `k` of a leaf of `n` triangles.
+#[inline(always)]
+fn lanes(n: u32, k: usize) -> u32 {
+    let rest = n - 4 * k as u32;
+    if rest >= 4 {
+        0xf
+    } else {
+        (1 << rest) - 1
+    }
+}
+
+struct AnyQuery<'a> {
+    geometry: &'a Geometry,
+    ray: &'a Ray,
+    tri: TriRay,
+    tests: u64,
+}
+
+impl Query for AnyQuery<'_> {
+    const ORDERED: bool = false;
+
+    #[inline(always)]
+    fn leaf(&mut self, bvh: &Bvh, r: Ref) -> bool {
+        let n = r.meta & COUNT_MASK;
+        let first = r.child as usize;
+        if r.meta & !COUNT_MASK == TRI_LEAF {
+            for (k, t) in bvh.tris[first..first + n.div_ceil(4) as usize]
+                .iter()
+                .enumerate()
+            {
+                if self
+                    .tri
+                    .test(t, self.ray.tmin, self.ray.tmax, lanes(n, k))
+                    .mask
+                    != 0
+                {
+                    self.tests += (n as u64).min(4 * k as u64 + 4);
+                    return true;
+                }
+            }
+            self.tests += n as u64;
+        } else {
+            for (k, &id) in bvh.ids[first..first + n as usize].iter().enumerate() {
+                if self
+                    .geometry
+                    .intersect_prim(id, self.ray, &self.tri.sr)
+                    .is_some()
+                {
+                    self.tests += k as u64 + 1;
+                    return true;
+                }
+            }
+            self.tests += n as u64;
+        }
+        false
+    }
+
+    #[inline(always)]
+    fn tmax(&self) -> f32 {
+        self.ray.tmax
+    }
+}
+
+/// A ray prepared for box tests: origin, reciprocal direction, and for each axis the plane
+/// (index into a node's `b`) crossed first and last.
+pub(super) struct RayBox<I: Isa> {
+    isa: I,
+    o: [I::F8; 3],
+    pub(super) inv: [I::F8; 3],
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+const _: () = assert!(W == 8, "the box test is written for eight children");
+
+impl<I: Isa> RayBox<I> {
+    #[inline(always)]
+    pub(super) fn new(r: &Ray, isa: I) -> Self {
+        // One division for the three reciprocals (the same IEEE quotients).
+        let q = F4::splat(1.0)
+            .div(F4::load(&[r.d.x, r.d.y, r.d.z, 1.0]))
+            .to_array();
+        let inv = [q[0], q[1], q[2]];
+        let near = [
+            if inv[0] < 0.0 { 3 } else { 0 },
+            if inv[1] < 0.0 { 4 } else { 1 },
+            if inv[2] < 0.0 { 5 } else { 2 },
+        ];
+        Self {
+            isa,
+            o: [isa.splat8(r.o.x), isa.splat8(r.o.y), isa.splat8(r.o.z)],
+            inv: inv.map(|x| isa.splat8(x)),
+            near,
+            far: [(near[0] + 3) % 6, (near[1] + 3) % 6, (near[2] + 3) % 6],
+        }
+    }
+
+    /// The slab test of the child boxes against `[tmin, tmax]` (the far distance grows by
+    /// 2γ₃). A NaN (0·∞ on a slab plane) never narrows the interval. Returns the mask of hit
+    /// children and their entry distances.
+    #[inline(always)]
+    pub(super) fn test(&self, n: &BvhNode, tmin: f32, tmax: f32) -> (u32, [f32; W]) {
+        let isa = self.isa;
+        let mut t0 = isa.splat8(tmin);
+        let mut t1 = isa.splat8(tmax);
+        for a in 0..3 {
+            let tn = isa.mul8(
+                isa.sub8(isa.load8(&n.b[self.near[a]]), self.o[a]),
+                self.inv[a],
+            );
+            let tf = isa.mul8(
+                isa.sub8(isa.load8(&n.b[self.far[a]]), self.o[a]),
+                self.inv[a],
+            );
+            t0 = isa.max_keep8(tn, t0);
+            t1 = isa.min_keep8(tf, t1);
+        }
+        let mask = isa.le8(t0, isa.mul8(t1, isa.splat8(FAR_SCALE)));
+        (mask, isa.store8(t0))
+    }
+}
+
+/// The ray for the watertight triangle test: the sheared ray and the origin.
+pub(super) struct TriRay {
+    pub(super) sr: ShearedRay,
+    /// The origin, permuted (x, y, z of the sheared space).
+    o: [F4; 3],
+    /// The shear.
+    s: [F4; 3],
+}
+
+/// The results of a block test: the lanes hit, their `t`, the scaled barycentrics of B and C
+/// and the reciprocal determinant.
+struct Tri4Hit {
+    mask: u32,
+    t: [f32; 4],
+    v: [f32; 4],
+    w: [f32; 4],
+    inv_det: [f32; 4],
+}
+
+impl TriRay {
+    #[inline(always)]
+    pub(super) fn new(ray: &Ray, triangles: bool) -> Self {
+        let sr = if triangles {
+            // `ShearedRay::new` with one division for the three quotients.
+            let k = ShearedRay::axes(ray);
+            let d = [ray.d.x, ray.d.y, ray.d.z];
+            let q = F4::load(&[d[k[0]], d[k[1]], 1.0, 1.0])
+                .div(F4::splat(d[k[2]]))
+                .to_array();
+            ShearedRay {
+                k,
+                s: [q[0], q[1], q[2]],
+            }
+        } else {
+            ShearedRay::unused()
+        };
+        let o = [ray.o.x, ray.o.y, ray.o.z];
+        Self {
+            sr,
+            o: sr.k.map(|k| F4::splat(o[k])),
+            s: sr.s.map(F4::splat),
+        }
+    }
+
+    /// [`crate::shape::intersect_triangle`] on four triangles, lane by lane with the same
+    /// operations in the same order (so the same results, bit for bit); only the lanes set in
+    /// `lanes` can hit.
+    #[inline(always)]
+    fn test(&self, tri: &Tri4, tmin: f32, tmax: f32, lanes: u32) -> Tri4Hit {
+        let [kx, ky, kz] = self.sr.k;
+        let [sx, sy, sz] = self.s;
+        let v = &tri.v;
+        let mut pz = [F4::splat(0.0); 3];
+        let mut px = [F4::splat(0.0); 3];
+        let mut py = [F4::splat(0.0); 3];
+        for k in 0..3 {
+            let z = F4::load(&v[k][kz]).sub(self.o[2]);
+            pz[k] = z;
+            px[k] = F4::load(&v[k][kx]).sub(self.o[0]).sub(sx.mul(z));
+            py[k] = F4::load(&v[k][ky]).sub(self.o[1]).sub(sy.mul(z));
+        }
+        let [ax, bx, cx] = px;
+        let [ay, by, cy] = py;
+        let mut u = cx.mul(by).sub(cy.mul(bx));
+        let mut vv = ax.mul(cy).sub(ay.mul(cx));
+        let mut w = bx.mul(ay).sub(by.mul(ax));
+        let zero = F4::splat(0.0);
+        if (u.eq(zero) | vv.eq(zero) | w.eq(zero)) != 0 {
+            // On an edge, f32 cannot decide the sign: redo the edge functions in f64.
+            let f =
+                |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
+            let (mut uu, mut v2, mut ww) = (u.to_array(), vv.to_array(), w.to_array());
+            let (ax, ay, bx, by, cx, cy) = (
+                ax.to_array(),
+                ay.to_array(),
+                bx.to_array(),
+                by.to_array(),
+                cx.to_array(),
+                cy.to_array(),
+            );
+            for i in 0..4 {
+                if uu[i] == 0.0 || v2[i] == 0.0 || ww[i] == 0.0 {
+                    uu[i] = f(cx[i], by[i], cy[i], bx[i]);
+                    v2[i] = f(ax[i], cy[i], ay[i], cx[i]);
+                    ww[i] = f(bx[i], ay[i], by[i], ax[i]);
+                }
+            }
+            (u, vv, w) = (F4::load(&uu), F4::load(&v2), F4::load(&ww));
+        }
+        let neg = u.lt(zero) | vv.lt(zero) | w.lt(zero);
+        let pos = u.gt(zero) | vv.gt(zero) | w.gt(zero);
+        let det = u.add(vv).add(w);
+        let t_scaled = u
+            .mul(sz.mul(pz[0]))
+            .add(vv.mul(sz.mul(pz[1])))
+            .add(w.mul(sz.mul(pz[2])));
+        let inv_det = F4::splat(1.0).div(det);
+        let t = t_scaled.mul(inv_det);
+        let valid =
+            det.ne(zero) & t.gt(F4::splat(tmin)) & t.lt(F4::splat(tmax)) & !(neg & pos) & lanes;
+        Tri4Hit {
+            mask: valid,
+            t: t.to_array(),
+            v: vv.to_array(),
+            w: w.to_array(),
+            inv_det: inv_det.to_array(),
+        }
+    }
+}
