@@ -5,7 +5,7 @@
 
 use super::fresnel::{fresnel_conductor, reflect};
 use super::microfacet::Microfacet;
-use super::{reflection_sample, LocalSample};
+use super::sample::{reflection_sample, LocalSample};
 use crate::color::Rgb;
 use crate::math::Vec3;
 

@@ -10,7 +10,7 @@
 
 use super::fresnel::{fresnel_dielectric, reflect, reflect_z, refract, refract_z};
 use super::microfacet::Microfacet;
-use super::LocalSample;
+use super::sample::LocalSample;
 use crate::color::Rgb;
 use crate::math::Vec3;
 

@@ -3,7 +3,7 @@
 //! Scene syntax: `diffuse(pigment)` (candela), `<bsdf type="diffuse">` with `reflectance`
 //! (Mitsuba, default 0.5).
 
-use super::LocalSample;
+use super::sample::LocalSample;
 use crate::color::Rgb;
 use crate::math::{Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};

@@ -12,7 +12,7 @@
 //! k_s.
 
 use super::fresnel::{reflect, reflect_z};
-use super::{reflection_sample, specular_probability, LocalSample};
+use super::sample::{reflection_sample, specular_probability, LocalSample};
 use crate::color::Rgb;
 use crate::math::{Frame, Vec3, INV_PI, PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};

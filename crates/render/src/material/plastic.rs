@@ -18,7 +18,7 @@ use super::fresnel::{
     fresnel_dielectric, fresnel_diffuse_reflectance, reflect, reflect_z, refract,
 };
 use super::microfacet::Microfacet;
-use super::{reflection_sample, specular_probability, LocalSample};
+use super::sample::{reflection_sample, specular_probability, LocalSample};
 use crate::color::Rgb;
 use crate::math::{Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};

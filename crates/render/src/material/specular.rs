@@ -5,7 +5,7 @@
 //! perfect mirror) and `specular_reflectance` (Mitsuba).
 
 use super::fresnel::{fresnel_conductor, reflect_z};
-use super::LocalSample;
+use super::sample::LocalSample;
 use crate::color::Rgb;
 use crate::math::Vec3;
 

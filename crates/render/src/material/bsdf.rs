@@ -1,0 +1,234 @@
+//! The BSDF at a surface point: a material's model with its textures resolved, in the shading
+//! frame. `eval` includes the cosine, `sample` takes uniform numbers, `pdf` is per unit solid
+//! angle (0 for Dirac deltas); two-sided BSDFs mirror the back side onto the front.
+
+use super::cook_torrance::CookTorrance;
+use super::microfacet::Microfacet;
+use super::phong::PhongBrdf;
+use super::plastic::{Plastic, RoughPlastic};
+use super::sample::{BsdfSample, LocalSample};
+use super::{conductor, dielectric, lambert, specular};
+use crate::color::Rgb;
+use crate::math::{Frame, Vec3};
+
+/// A material's scattering at one point, textures resolved.
+#[derive(Clone, Copy, Debug)]
+pub enum BsdfModel<'a> {
+    /// Lambert.
+    Lambert(Rgb),
+    /// Perfect mirror or smooth conductor.
+    Mirror {
+        /// Reflectance.
+        r: Rgb,
+        /// Conductor index, or `None` for F = 1.
+        eta_k: Option<(Rgb, Rgb)>,
+    },
+    /// Rough conductor.
+    RoughConductor {
+        /// Distribution.
+        mf: Microfacet,
+        /// Conductor index.
+        eta_k: Option<(Rgb, Rgb)>,
+        /// Reflectance.
+        r: Rgb,
+    },
+    /// Smooth dielectric.
+    Dielectric {
+        /// Relative index.
+        eta: f32,
+        /// Reflection scale.
+        r: Rgb,
+        /// Transmission scale.
+        t: Rgb,
+    },
+    /// Rough dielectric.
+    RoughDielectric {
+        /// Distribution.
+        mf: Microfacet,
+        /// Relative index.
+        eta: f32,
+        /// Reflection scale.
+        r: Rgb,
+        /// Transmission scale.
+        t: Rgb,
+    },
+    /// Smooth plastic.
+    Plastic(Plastic),
+    /// Rough plastic.
+    RoughPlastic(RoughPlastic<'a>),
+    /// Phong or Blinn–Phong.
+    Phong(PhongBrdf),
+    /// Cook–Torrance.
+    CookTorrance(CookTorrance),
+}
+
+/// A BSDF at a surface point: the model in its shading frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf<'a> {
+    /// The resolved model.
+    pub model: BsdfModel<'a>,
+    /// Local frame (z = shading normal as the shape orients it).
+    pub frame: Frame,
+    /// Mirror the back side onto the front.
+    pub two_sided: bool,
+}
+
+impl Bsdf<'_> {
+    /// Local directions, mirrored to the front when two-sided and seen from the back.
+    #[inline]
+    fn local(&self, wo: Vec3, wi: Vec3) -> (Vec3, Vec3, bool) {
+        let (o, flip) = self.local_wo(wo);
+        (o, self.local_wi(wi, flip), flip)
+    }
+
+    /// The outgoing direction `wo` (world, unit) in the local frame, mirrored to the front when
+    /// the BSDF is two-sided and seen from the back, and whether it was mirrored: computed once
+    /// per vertex for [`Bsdf::local_wi`], [`Bsdf::eval_local`], [`Bsdf::pdf_local`] and
+    /// [`Bsdf::sample_local`].
+    #[inline]
+    pub fn local_wo(&self, wo: Vec3) -> (Vec3, bool) {
+        let mut o = self.frame.to_local(wo);
+        let flip = self.two_sided && o.z < 0.0;
+        if flip {
+            o.z = -o.z;
+        }
+        (o, flip)
+    }
+
+    /// The incident direction `wi` (world, unit) in the local frame, mirrored like `wo`.
+    #[inline]
+    pub fn local_wi(&self, wi: Vec3, flip: bool) -> Vec3 {
+        let mut i = self.frame.to_local(wi);
+        if flip {
+            i.z = -i.z;
+        }
+        i
+    }
+
+    /// f(wo, wi)·|cos θi| (world directions, unit).
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        let (o, i, _) = self.local(wo, wi);
+        self.eval_local(o, i)
+    }
+
+    /// [`Bsdf::eval`] for directions from [`Bsdf::local_wo`] and [`Bsdf::local_wi`].
+    #[inline(always)]
+    pub fn eval_local(&self, o: Vec3, i: Vec3) -> Rgb {
+        // Lambert, the common case, without a call.
+        if let BsdfModel::Lambert(r) = &self.model {
+            return lambert::eval(*r, o, i);
+        }
+        self.eval_general(o, i)
+    }
+
+    /// [`Bsdf::eval_local`] for every model.
+    #[inline(never)]
+    fn eval_general(&self, o: Vec3, i: Vec3) -> Rgb {
+        match &self.model {
+            BsdfModel::Lambert(r) => lambert::eval(*r, o, i),
+            BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => Rgb::BLACK,
+            BsdfModel::RoughConductor { mf, eta_k, r } => conductor::eval(mf, *eta_k, *r, o, i),
+            BsdfModel::RoughDielectric { mf, eta, r, t } => {
+                dielectric::eval_rough(mf, *eta, *r, *t, o, i)
+            }
+            BsdfModel::Plastic(p) => p.eval(o, i),
+            BsdfModel::RoughPlastic(p) => p.eval(o, i),
+            BsdfModel::Phong(p) => p.eval(o, i),
+            BsdfModel::CookTorrance(c) => c.eval(o, i),
+        }
+    }
+
+    /// The density with which [`Bsdf::sample`] returns `wi` (0 for delta components).
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let (o, i, _) = self.local(wo, wi);
+        self.pdf_local(o, i)
+    }
+
+    /// [`Bsdf::pdf`] for directions from [`Bsdf::local_wo`] and [`Bsdf::local_wi`].
+    #[inline(always)]
+    pub fn pdf_local(&self, o: Vec3, i: Vec3) -> f32 {
+        // Lambert, the common case, without a call.
+        if let BsdfModel::Lambert(_) = &self.model {
+            return lambert::pdf(o, i);
+        }
+        self.pdf_general(o, i)
+    }
+
+    /// [`Bsdf::pdf_local`] for every model.
+    #[inline(never)]
+    fn pdf_general(&self, o: Vec3, i: Vec3) -> f32 {
+        match &self.model {
+            BsdfModel::Lambert(_) => lambert::pdf(o, i),
+            BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => 0.0,
+            BsdfModel::RoughConductor { mf, .. } => conductor::microfacet_pdf(mf, o, i),
+            BsdfModel::RoughDielectric { mf, eta, .. } => dielectric::pdf_rough(mf, *eta, o, i),
+            BsdfModel::Plastic(p) => p.pdf(o, i),
+            BsdfModel::RoughPlastic(p) => p.pdf(o, i),
+            BsdfModel::Phong(p) => p.pdf(o, i),
+            BsdfModel::CookTorrance(c) => c.pdf(o, i),
+        }
+    }
+
+    /// Samples an incident direction for the outgoing direction `wo`, from the uniform numbers
+    /// `u1` (lobe choice) and `u2`.
+    pub fn sample(&self, wo: Vec3, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
+        let (o, flip) = self.local_wo(wo);
+        self.sample_local(o, flip, u1, u2)
+    }
+
+    /// [`Bsdf::sample`] for `wo` from [`Bsdf::local_wo`] (`o` and `flip`).
+    #[inline(always)]
+    pub fn sample_local(&self, o: Vec3, flip: bool, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
+        // Lambert, the common case, without a call.
+        let s = if let BsdfModel::Lambert(r) = &self.model {
+            lambert::sample(*r, o, u2)
+        } else {
+            self.sample_general(o, u1, u2)
+        }?;
+        self.world_sample(s, flip)
+    }
+
+    /// The local sample `s` in world space (mirrored back when `wo` was), or `None` when not
+    /// finite.
+    #[inline(always)]
+    fn world_sample(&self, s: LocalSample, flip: bool) -> Option<BsdfSample> {
+        let mut wi = s.wi;
+        if flip {
+            wi.z = -wi.z;
+        }
+        let wi = self.frame.to_world(wi);
+        (s.weight.is_finite() && wi.is_finite()).then_some(BsdfSample {
+            wi,
+            weight: s.weight,
+            pdf: s.pdf,
+            delta: s.delta,
+            eta: s.eta,
+        })
+    }
+
+    /// The local sample of every model.
+    #[inline(never)]
+    fn sample_general(&self, o: Vec3, u1: f32, u2: [f32; 2]) -> Option<LocalSample> {
+        match &self.model {
+            BsdfModel::Lambert(r) => lambert::sample(*r, o, u2),
+            BsdfModel::Mirror { r, eta_k } => specular::sample(*r, *eta_k, o),
+            BsdfModel::RoughConductor { mf, eta_k, r } => conductor::sample(mf, *eta_k, *r, o, u2),
+            BsdfModel::Dielectric { eta, r, t } => dielectric::sample_smooth(*eta, *r, *t, o, u1),
+            BsdfModel::RoughDielectric { mf, eta, r, t } => {
+                dielectric::sample_rough(mf, *eta, *r, *t, o, u1, u2)
+            }
+            BsdfModel::Plastic(p) => p.sample(o, u1, u2),
+            BsdfModel::RoughPlastic(p) => p.sample(o, u1, u2),
+            BsdfModel::Phong(p) => p.sample(o, u1, u2),
+            BsdfModel::CookTorrance(c) => c.sample(o, u1, u2),
+        }
+    }
+
+    /// True when every component is a Dirac delta (light sampling cannot help).
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self.model,
+            BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. }
+        )
+    }
+}
