@@ -16,7 +16,8 @@
 
 use std::ffi::{c_char, c_void, CString};
 
-use super::{build_prims, closest, inflate, margin, BuildPrim, Bvh};
+use super::prims::{build_prims, inflate, margin, BuildPrim};
+use super::{closest, Bvh};
 use crate::geometry::{Geometry, PrimRef};
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray};

@@ -32,10 +32,8 @@
 //! walk only stops once the next cell starts beyond `t_limit` of the best hit; shadow rays stop
 //! at the first hit.
 
-use super::{
-    clip, inflate, inv_dir, margin, t_limit, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
-    ClosestVisitor,
-};
+use super::prims::{inflate, margin, union_bounds, BuildPrim};
+use super::visit::{clip, inv_dir, t_limit, AnyVisitor, CellVisitor, ClosestVisitor};
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray, Vec3};
@@ -594,7 +592,7 @@ mod tests {
     use crate::math::Point3;
 
     fn grid(g: &Geometry) -> Grid {
-        Grid::build(&super::super::build_prims(g))
+        Grid::build(&crate::accel::build_prims(g))
     }
 
     #[test]

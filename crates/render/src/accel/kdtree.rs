@@ -37,10 +37,8 @@
 //! a node entered beyond `t_limit` of the best hit is skipped (entries are only nearly ordered
 //! with thick planes, so the stack is still emptied); shadow rays stop at the first hit.
 
-use super::{
-    clip, inflate, inv_dir, margin, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
-    ClosestVisitor,
-};
+use super::prims::{inflate, margin, union_bounds, BuildPrim};
+use super::visit::{clip, inv_dir, AnyVisitor, CellVisitor, ClosestVisitor};
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Ray};
@@ -547,7 +545,7 @@ mod tests {
     use crate::math::{Point3, Vec3};
 
     fn kdtree(g: &Geometry) -> KdTree {
-        KdTree::build(&super::super::build_prims(g))
+        KdTree::build(&crate::accel::build_prims(g))
     }
 
     #[test]

@@ -18,10 +18,8 @@
 //! in a later one, so traversal stops only at a node entered beyond
 //! `t_limit` of the best hit; shadow rays stop at the first hit.
 
-use super::{
-    clip, inflate, inv_dir, margin, t_limit, union_bounds, AnyVisitor, BuildPrim, CellVisitor,
-    ClosestVisitor,
-};
+use super::prims::{inflate, margin, union_bounds, BuildPrim};
+use super::visit::{clip, inv_dir, t_limit, AnyVisitor, CellVisitor, ClosestVisitor};
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Bounds3, Point3, Ray};
@@ -342,7 +340,7 @@ mod tests {
     use crate::math::Vec3;
 
     fn octree(g: &Geometry) -> Octree {
-        Octree::build(&super::super::build_prims(g))
+        Octree::build(&crate::accel::build_prims(g))
     }
 
     #[test]

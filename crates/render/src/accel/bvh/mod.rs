@@ -88,9 +88,10 @@ impl Bvh {
 mod tests {
     use super::traverse::{RayBox, TriRay};
     use super::*;
+    use crate::accel::build_prims;
+    use crate::accel::prims::{inflate, margin};
     use crate::accel::test_scenes::{check_against_list, parallelogram_scene, triangles};
     use crate::accel::BuildPrim;
-    use crate::accel::{build_prims, inflate, margin};
     use crate::geometry::Geometry;
     use crate::math::Ray;
     use crate::math::{Point3, Vec3};
