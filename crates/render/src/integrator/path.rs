@@ -151,7 +151,10 @@ impl Integrator for Path {
             ray = si.spawn_ray(bs.wi);
             depth += 1;
 
-            // Russian roulette on the throughput (with the η² of refractions removed).
+            // Russian roulette from `rr_depth` on: the path survives with probability
+            // q = min(max(β) / Πη², 0.95), where Πη² is the product of the squared relative
+            // indices of the refractions taken so far (`eta_scale`), and survivors are divided
+            // by q.
             if depth >= self.rr_depth {
                 let q = (beta.max_component() / eta_scale).min(0.95);
                 if !(sampler.next_1d() < q) {
