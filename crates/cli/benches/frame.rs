@@ -26,7 +26,7 @@ fn frame(b: Bencher, loaded: candela_scene::LoadedScene, integrator: &str, size:
         hide_emitters: loaded.hints.hide_emitters,
         ..Default::default()
     };
-    let integ = kind.build(&loaded.scene, &s).unwrap();
+    let integ = kind.build(&loaded.scene, &s).unwrap().integrator;
     b.counter(divan::counter::ItemsCount::new(size * size * spp as usize))
         .bench(|| render(&loaded.scene, integ.as_ref(), &settings, &|_| {}));
 }

@@ -6,7 +6,7 @@ use candela_imageio::{Encoding, ToneMap};
 use candela_render::accel::AccelKind;
 use candela_render::integrator::{IntegratorKind, IntegratorSettings};
 use candela_render::radiosity::{
-    CacheStatus, FormFactorMethod, RadiosityOptions, RadiosityOutbox, SolverKind,
+    CacheStatus, FormFactorMethod, RadiosityOptions, RadiosityOutcome, SolverKind,
 };
 use candela_render::render::{render as render_image, RenderSettings};
 use candela_render::sampling::SamplerKind;
@@ -133,7 +133,6 @@ fn radiosity_options(args: &RenderArgs, kind: IntegratorKind) -> Result<Radiosit
         })?;
     }
     if kind == IntegratorKind::Radiosity {
-        o.outbox = Some(RadiosityOutbox::new());
         if let Some(path) = &args.radiosity_cache {
             match std::fs::read(path) {
                 Ok(bytes) => o.cache = Some(bytes.into()),
@@ -150,10 +149,7 @@ fn radiosity_options(args: &RenderArgs, kind: IntegratorKind) -> Result<Radiosit
 
 /// Prints the radiosity warnings (and the report with `--stats`) and saves a computed
 /// solution to `--radiosity-cache`.
-fn radiosity_outcome(o: &RadiosityOptions, args: &RenderArgs) -> Result<()> {
-    let Some(outcome) = o.outbox.as_ref().and_then(|b| b.take()) else {
-        return Ok(());
-    };
+fn radiosity_outcome(outcome: &RadiosityOutcome, args: &RenderArgs) -> Result<()> {
     for w in &outcome.report.warnings {
         eprintln!("candela: warning: {w}");
     }
@@ -241,10 +237,13 @@ fn render_and_write(
             eprintln!("candela: warning: {place} is a term of the local model, ignored by the {name} integrator");
         }
     }
-    let integrator = kind
+    let built = kind
         .build(&loaded.scene, &integrator_settings)
         .map_err(|e| anyhow::anyhow!("--integrator '{name}': {e}"))?;
-    radiosity_outcome(&integrator_settings.radiosity, args)?;
+    if let Some(outcome) = &built.radiosity {
+        radiosity_outcome(outcome, args)?;
+    }
+    let integrator = built.integrator;
 
     let settings = RenderSettings {
         width: args.width.or(hints.width).unwrap_or(640) as usize,

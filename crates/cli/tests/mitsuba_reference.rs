@@ -27,7 +27,8 @@ fn renders(spp: u32, seeds: std::ops::Range<u64>) -> Vec<Image> {
     };
     let integ = IntegratorKind::Path
         .build(&loaded.scene, &settings)
-        .unwrap();
+        .unwrap()
+        .integrator;
     seeds
         .map(|seed| {
             let rs = RenderSettings {

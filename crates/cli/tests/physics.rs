@@ -21,7 +21,8 @@ fn render_example(
     let integ = IntegratorKind::from_name(integrator)
         .unwrap()
         .build(&loaded.scene, &settings)
-        .unwrap();
+        .unwrap()
+        .integrator;
     let rs = RenderSettings {
         width: 24,
         height: 24,

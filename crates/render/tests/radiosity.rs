@@ -12,7 +12,7 @@ use candela_render::material::Material;
 use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::radiosity::{
     CacheStatus, DisplayMode, FormFactorMatrix, FormFactorMethod, PatchInfo, Radiosity,
-    RadiosityOptions, RadiosityOutbox, Side, SolverKind,
+    RadiosityOptions, Side, SolverKind,
 };
 use candela_render::shape::{Disk, Mesh, Shape, Sphere};
 use candela_render::texture::Texture;
@@ -546,20 +546,18 @@ fn the_cache_round_trips_and_detects_stale_solutions() {
 }
 
 #[test]
-fn the_integrator_is_built_by_name_and_reports_through_the_outbox() {
+fn the_integrator_is_built_by_name_and_returns_its_report() {
     let scene = cornell(AccelKind::Bvh);
-    let outbox = RadiosityOutbox::new();
     let settings = IntegratorSettings {
         radiosity: RadiosityOptions {
             patch_size: Some(0.4),
             hemicube_resolution: 64,
-            outbox: Some(outbox.clone()),
             ..Default::default()
         },
         ..Default::default()
     };
-    let integrator = IntegratorKind::Radiosity.build(&scene, &settings).unwrap();
-    let out = outbox.take().expect("an outcome");
+    let built = IntegratorKind::Radiosity.build(&scene, &settings).unwrap();
+    let (integrator, out) = (built.integrator, built.radiosity.expect("an outcome"));
     assert!(out.report.patches > 0 && out.cache_bytes.is_some());
     assert!(out.report.to_string().contains("patches"));
     let img = image(&scene, integrator.as_ref(), 16, 1);

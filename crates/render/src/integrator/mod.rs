@@ -6,6 +6,7 @@
 mod debug;
 mod local;
 mod path;
+mod radiosity;
 mod whitted;
 
 pub use debug::{Depth, Flat, Normals, OnOff};
@@ -93,30 +94,31 @@ impl IntegratorKind {
         Self::NAMES.iter().position(|&n| n == name).map(|i| all[i])
     }
 
-    /// The integrator for `scene`, or why it cannot be built.
+    /// The integrator for `scene`, with what building it reported (a radiosity solve), or why
+    /// it cannot be built.
     pub fn build(
         self,
         scene: &Scene,
         settings: &IntegratorSettings,
-    ) -> Result<Box<dyn Integrator>, String> {
-        match self {
-            IntegratorKind::OnOff => Ok(Box::new(OnOff)),
-            IntegratorKind::Flat => Ok(Box::new(Flat)),
-            IntegratorKind::Normals => Ok(Box::new(Normals)),
-            IntegratorKind::Depth => Ok(Box::new(Depth)),
-            IntegratorKind::Local => Ok(Box::new(Local { shadows: false })),
-            IntegratorKind::Direct => Ok(Box::new(Local { shadows: true })),
-            IntegratorKind::Whitted => Ok(Box::new(Whitted {
+    ) -> Result<BuiltIntegrator, String> {
+        let integrator: Box<dyn Integrator> = match self {
+            IntegratorKind::OnOff => Box::new(OnOff),
+            IntegratorKind::Flat => Box::new(Flat),
+            IntegratorKind::Normals => Box::new(Normals),
+            IntegratorKind::Depth => Box::new(Depth),
+            IntegratorKind::Local => Box::new(Local { shadows: false }),
+            IntegratorKind::Direct => Box::new(Local { shadows: true }),
+            IntegratorKind::Whitted => Box::new(Whitted {
                 max_depth: match settings.max_depth {
                     None => 10,
                     Some(d) if d < 0 => 10_000,
                     Some(d) => d as u32,
                 },
-            })),
+            }),
             IntegratorKind::Path => {
                 let max_depth = settings.max_depth.filter(|&d| d >= 0).map(|d| d as u32);
                 let rr_depth = settings.rr_depth.unwrap_or(5);
-                Ok(if settings.num_of_rays > 1 {
+                if settings.num_of_rays > 1 {
                     Box::new(CoursePath {
                         num_of_rays: settings.num_of_rays,
                         max_depth,
@@ -128,9 +130,27 @@ impl IntegratorKind {
                         rr_depth,
                         hide_emitters: settings.hide_emitters,
                     })
-                })
+                }
             }
-            IntegratorKind::Radiosity => crate::radiosity::build(scene, &settings.radiosity),
-        }
+            IntegratorKind::Radiosity => {
+                let (integrator, outcome) = radiosity::build(scene, &settings.radiosity)?;
+                return Ok(BuiltIntegrator {
+                    integrator: Box::new(integrator),
+                    radiosity: Some(outcome),
+                });
+            }
+        };
+        Ok(BuiltIntegrator {
+            integrator,
+            radiosity: None,
+        })
     }
+}
+
+/// An integrator ready to render, with what building it reported.
+pub struct BuiltIntegrator {
+    /// The integrator.
+    pub integrator: Box<dyn Integrator>,
+    /// The report (and the solution's bytes, when computed) of a radiosity solve.
+    pub radiosity: Option<crate::radiosity::RadiosityOutcome>,
 }

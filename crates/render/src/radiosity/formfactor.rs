@@ -1,98 +1,16 @@
-//! Rows of the form-factor matrix, computed on demand by the chosen method, and statistics of
-//! their quality (row sums, reciprocity).
-//!
-//! A row holds the non-zero F_ij of one patch i as sorted column indices and f32 values
-//! (8 bytes per entry). Gauss–Seidel computes and keeps all rows (in parallel); progressive
+//! Rows of the form-factor matrix ([`super::row`]), computed on demand by the chosen method
+//! (hemicube or ray casting). Gauss–Seidel computes and keeps all rows (in parallel); progressive
 //! refinement asks for the rows of its shooting patches only and keeps them in a bounded cache,
 //! so it never needs the N² matrix.
 
 use super::hemicube::{Hemicube, HemicubeScratch, Raster};
 use super::mesh::Meshing;
-use super::{raycast, FormFactorMethod};
+use super::options::{FormFactorMethod, RadiosityOptions};
+use super::patches::{infos, PatchInfo};
+use super::raycast::{self, RayCasting};
+use super::row::{Row, RowAcc};
 use crate::scene::Scene;
 use rayon::prelude::*;
-
-/// One row of the form-factor matrix.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub(crate) struct Row {
-    pub cols: Vec<u32>,
-    pub vals: Vec<f32>,
-    /// The part of the patch's hemisphere covered by surfaces without a patch on the side it
-    /// sees (the back of a one-sided surface, the inside of a solid) or closer than half the
-    /// patch size: near 1 when the patch's centre is hidden (under a box standing on it,
-    /// behind a light mounted just below it).
-    pub occluded: f32,
-}
-
-impl Row {
-    /// Σ_j F_ij.
-    pub fn sum(&self) -> f64 {
-        self.vals.iter().map(|&v| v as f64).sum()
-    }
-
-    /// F_ij (0 when absent).
-    pub fn get(&self, j: u32) -> f32 {
-        self.cols
-            .binary_search(&j)
-            .map(|k| self.vals[k])
-            .unwrap_or(0.0)
-    }
-
-    /// Memory held, in bytes.
-    pub fn bytes(&self) -> usize {
-        self.cols.capacity() * 4 + self.vals.capacity() * 4 + std::mem::size_of::<Row>()
-    }
-}
-
-/// A dense accumulator for one row (f64 sums) with the list of touched columns.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct RowAcc {
-    dense: Vec<f64>,
-    touched: Vec<u32>,
-}
-
-impl RowAcc {
-    /// An accumulator for `n` patches.
-    pub fn new(n: usize) -> Self {
-        Self {
-            dense: vec![0.0; n],
-            touched: Vec::new(),
-        }
-    }
-
-    /// Adds `v` to column `j`.
-    #[inline]
-    pub fn add(&mut self, j: u32, v: f64) {
-        let d = &mut self.dense[j as usize];
-        if *d == 0.0 {
-            self.touched.push(j);
-        }
-        *d += v;
-        if *d == 0.0 {
-            // Keep the entry marked as touched.
-            *d = f64::MIN_POSITIVE;
-        }
-    }
-
-    /// The row, resetting the accumulator.
-    pub fn finish(&mut self) -> Row {
-        self.touched.sort_unstable();
-        let mut row = Row {
-            cols: Vec::with_capacity(self.touched.len()),
-            vals: Vec::with_capacity(self.touched.len()),
-            occluded: 0.0,
-        };
-        for &j in &self.touched {
-            let v = std::mem::take(&mut self.dense[j as usize]);
-            if v > 1e-30 {
-                row.cols.push(j);
-                row.vals.push(v as f32);
-            }
-        }
-        self.touched.clear();
-        row
-    }
-}
 
 /// Computes rows with one method.
 pub(crate) struct Engine<'a> {
@@ -151,16 +69,15 @@ impl<'a> Engine<'a> {
     pub fn row(&self, i: u32, s: &mut Scratch) -> Row {
         match (&self.hemicube, &mut s.hc) {
             (Some((h, raster)), Some(hs)) => h.row(raster, self.mesh, i, hs, &mut s.acc),
-            _ => raycast::row(
-                self.scene,
-                self.mesh,
-                &self.traced,
-                i,
-                self.rays,
-                self.seed,
-                self.emitters.as_deref(),
-                &mut s.acc,
-            ),
+            _ => RayCasting {
+                scene: self.scene,
+                mesh: self.mesh,
+                traced: &self.traced,
+                rays: self.rays,
+                seed: self.seed,
+                emitters: self.emitters.as_deref(),
+            }
+            .row(i, &mut s.acc),
         }
     }
 
@@ -172,52 +89,45 @@ impl<'a> Engine<'a> {
     }
 }
 
-/// Quality statistics of a set of rows.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct RowStats {
-    pub rows: u64,
-    pub sum_min: f64,
-    pub sum_max: f64,
-    pub sum_total: f64,
+/// The patches of a scene (without refinement) and every row of their form-factor matrix.
+#[derive(Clone, Debug)]
+pub struct FormFactorMatrix {
+    /// The patches.
+    pub patches: Vec<PatchInfo>,
+    /// Row i: the non-zero F_ij as (j, F_ij), sorted by j.
+    pub rows: Vec<Vec<(u32, f32)>>,
 }
 
-impl RowStats {
-    /// Adds a row's sum.
-    pub fn add(&mut self, s: f64) {
-        if self.rows == 0 {
-            self.sum_min = s;
-            self.sum_max = s;
-        } else {
-            self.sum_min = self.sum_min.min(s);
-            self.sum_max = self.sum_max.max(s);
-        }
-        self.sum_total += s;
-        self.rows += 1;
+impl FormFactorMatrix {
+    /// Meshes `scene` and computes all form factors with the method and parameters of `opts`.
+    pub fn compute(scene: &Scene, opts: &RadiosityOptions) -> Self {
+        Self::compute_rows(scene, opts, &|_| true)
     }
-}
 
-/// Reciprocity over the pairs (i, j) with i among at most 256 evenly spaced rows and j's row
-/// known: (Σ|A_i F_ij − A_j F_ji| / Σ(A_i F_ij + A_j F_ji), the largest relative difference
-/// among pairs whose larger F is ≥ 0.01, pairs checked).
-pub(crate) fn reciprocity(rows: &[Option<&Row>], area: &[f64]) -> (f64, f64, u64) {
-    let (mut num, mut den, mut worst, mut pairs) = (0f64, 0f64, 0f64, 0u64);
-    let stride = rows.len().div_ceil(256).max(1);
-    for i in (0..rows.len()).step_by(stride) {
-        let Some(ri) = rows[i] else { continue };
-        for (&j, &fij) in ri.cols.iter().zip(&ri.vals) {
-            let j = j as usize;
-            let Some(Some(rj)) = rows.get(j) else {
-                continue;
-            };
-            let fji = rj.get(i as u32);
-            let (a, b) = (area[i] * fij as f64, area[j] * fji as f64);
-            num += (a - b).abs();
-            den += a + b;
-            pairs += 1;
-            if (fij as f64).max(fji as f64) >= 0.01 && a + b > 0.0 {
-                worst = worst.max((a - b).abs() / (0.5 * (a + b)));
-            }
+    /// Like [`FormFactorMatrix::compute`], but only the rows of the patches `which` accepts
+    /// (the others are left empty).
+    pub fn compute_rows(
+        scene: &Scene,
+        opts: &RadiosityOptions,
+        which: &dyn Fn(&PatchInfo) -> bool,
+    ) -> Self {
+        let m = Meshing::build(scene, opts.patch_size, opts.cull_hidden_sides);
+        let patches = infos(&m, &[]);
+        let engine = Engine::new(
+            scene,
+            &m,
+            opts.form_factors,
+            opts.hemicube_resolution,
+            opts.rays_per_patch,
+            opts.seed,
+        );
+        let ids: Vec<u32> = (0..m.patches.len() as u32)
+            .filter(|&i| which(&patches[i as usize]))
+            .collect();
+        let mut rows = vec![Vec::new(); m.patches.len()];
+        for (i, r) in ids.iter().zip(engine.rows(&ids)) {
+            rows[*i as usize] = r.cols.into_iter().zip(r.vals).collect();
         }
+        Self { patches, rows }
     }
-    (if den > 0.0 { num / den } else { 0.0 }, worst, pairs)
 }

@@ -16,8 +16,8 @@
 //! absorb what they cover. The depth test compares 1/depth, interpolated exactly from the
 //! element's plane equation.
 
-use super::formfactor::{Row, RowAcc};
 use super::mesh::Meshing;
+use super::row::{Row, RowAcc};
 use super::NONE;
 use crate::math::{Frame, Point3, Vec3};
 
@@ -215,14 +215,17 @@ impl Hemicube {
                 } else {
                     (res * res + (face - 1) * res * half, half)
                 };
-                raster_polygon(
-                    &poly[..count],
-                    [nf[0] / kk, nf[1] / kk, nf[2] / kk],
+                let mut buffer = FaceBuffer {
                     res,
                     rows,
                     top,
-                    &mut scratch.w[offset..offset + res * rows],
-                    &mut scratch.item[offset..offset + res * rows],
+                    w: &mut scratch.w[offset..offset + res * rows],
+                    item: &mut scratch.item[offset..offset + res * rows],
+                };
+                raster_polygon(
+                    &mut buffer,
+                    &poly[..count],
+                    [nf[0] / kk, nf[1] / kk, nf[2] / kk],
                     item,
                 );
             }
@@ -373,18 +376,20 @@ fn floor_i(x: f32) -> i32 {
     i - ((i as f32) > x) as i32
 }
 
-/// Rasterises a clipped convex polygon into one face: pixels whose centre is inside get the
-/// item when the polygon's 1/depth `w = plane·(sa, sb, 1)` is larger than the stored one.
-fn raster_polygon(
-    poly: &[[f32; 3]],
-    plane: [f32; 3],
+/// One face of the hemicube being rasterised: `rows` rows of `res` pixels (the top face, or
+/// the upper half of a side face), each with its 1/depth and the item seen.
+struct FaceBuffer<'a> {
     res: usize,
     rows: usize,
     top: bool,
-    wbuf: &mut [f32],
-    ibuf: &mut [u32],
-    item: u32,
-) {
+    w: &'a mut [f32],
+    item: &'a mut [u32],
+}
+
+/// Rasterises a clipped convex polygon into one face: pixels whose centre is inside get the
+/// item when the polygon's 1/depth `w = plane·(sa, sb, 1)` is larger than the stored one.
+fn raster_polygon(face: &mut FaceBuffer, poly: &[[f32; 3]], plane: [f32; 3], item: u32) {
+    let (res, rows, top) = (face.res, face.rows, face.top);
     let d = 2.0 / res as f32;
     let inv_d = res as f32 / 2.0;
     // Pixel coordinates.
@@ -432,8 +437,8 @@ fn raster_polygon(
         let row = j * res;
         let wb = plane[1] * sb + plane[2];
         // Branch-free depth test over the span (vectorises).
-        let ws = &mut wbuf[row + i0..row + i1];
-        let is = &mut ibuf[row + i0..row + i1];
+        let ws = &mut face.w[row + i0..row + i1];
+        let is = &mut face.item[row + i0..row + i1];
         let (w0, dw) = (plane[0] * ((i0 as f32 + 0.5) * d - 1.0) + wb, plane[0] * d);
         for (k, (wp, ip)) in ws.iter_mut().zip(is.iter_mut()).enumerate() {
             let w = w0 + dw * k as f32;

@@ -19,8 +19,8 @@
 //! reciprocity, A_i F_ij = A_j F_ji, instead of the few hemisphere rays that would reach each
 //! receiver.
 
-use super::formfactor::{Row, RowAcc};
 use super::mesh::{lambert_reflectance, Meshing};
+use super::row::{Row, RowAcc};
 use super::NONE;
 use crate::math::{Frame, Point2, Ray, Vec3, PI};
 use crate::sampling::pcg::hash2;
@@ -72,104 +72,121 @@ pub(crate) fn emitter_list(mesh: &Meshing) -> Option<Vec<u32>> {
     (list.len() <= 256 && area <= 0.1 * total).then_some(list)
 }
 
-/// Row `i` estimated with `rays` rays (deterministic for a given `seed`).
-pub(crate) fn row(
-    scene: &Scene,
-    mesh: &Meshing,
-    traced: &[bool],
-    i: u32,
-    rays: u32,
-    seed: u64,
-    emitters: Option<&[u32]>,
-    acc: &mut RowAcc,
-) -> Row {
-    let rays = rays.max(1);
-    let h = hash2(seed, i as u64);
-    let (pat_pos, pat_dir) = (h as u32, (h >> 32) as u32);
-    let mut sampler = Sampler::new(seed ^ 0x5eed, i as u64);
-    let mut stats = RayStats::default();
-    let is_emitter = |j: u32| emitters.is_some_and(|l| l.binary_search(&j).is_ok());
-    let w0 = 1.0 / rays as f64;
-    // Hits nearer than this, or on a side without a patch, count as occluded.
-    let near = 0.5 * mesh.patch_size;
-    let mut occluded = 0f64;
-    for k in 0..rays {
-        let (x, n) = patch_point(mesh, i, k, rays, pat_pos);
-        let d = Frame::from_normal(n.to_normal())
-            .to_world(warp::square_to_cosine_hemisphere(cmj(k, rays, pat_dir)));
-        let mut ray = Ray::spawn(x, n.to_normal(), d);
-        let mut w = w0;
-        for depth in 0..=MAX_SPECULAR {
-            let Some(hit) = scene.intersect(&ray, &mut stats) else {
-                break;
-            };
-            let si = scene.geometry.interaction(&ray, &hit);
-            if depth == 0 && hit.t * ray.d.norm() < near {
-                occluded += w0;
-            }
-            let m = si.props.material as usize;
-            if traced.get(m).copied().unwrap_or(false) {
-                // Follow the specular bounce with its mean weight.
-                let mat = &scene.materials[m];
-                let bsdf = mat.bsdf(si.shading_frame(), si.uv);
-                let Some(s) = bsdf.sample(si.wo, sampler.next_1d(), sampler.next_2d()) else {
+/// What ray-cast form factors are computed with.
+pub(crate) struct RayCasting<'a> {
+    /// The scene the rays are traced in.
+    pub scene: &'a Scene,
+    /// Its patches.
+    pub mesh: &'a Meshing,
+    /// Per material: traced through (mirrors, glass) rather than absorbing.
+    pub traced: &'a [bool],
+    /// Rays per row.
+    pub rays: u32,
+    /// The seed of the estimates.
+    pub seed: u64,
+    /// The emitting patches, sorted, when few enough to be aimed at directly.
+    pub emitters: Option<&'a [u32]>,
+}
+
+impl RayCasting<'_> {
+    /// Row `i` estimated with `self.rays` rays (deterministic for a given seed).
+    pub(crate) fn row(&self, i: u32, acc: &mut RowAcc) -> Row {
+        let (scene, mesh, traced, rays, seed, emitters) = (
+            self.scene,
+            self.mesh,
+            self.traced,
+            self.rays,
+            self.seed,
+            self.emitters,
+        );
+        let rays = rays.max(1);
+        let h = hash2(seed, i as u64);
+        let (pat_pos, pat_dir) = (h as u32, (h >> 32) as u32);
+        let mut sampler = Sampler::new(seed ^ 0x5eed, i as u64);
+        let mut stats = RayStats::default();
+        let is_emitter = |j: u32| emitters.is_some_and(|l| l.binary_search(&j).is_ok());
+        let w0 = 1.0 / rays as f64;
+        // Hits nearer than this, or on a side without a patch, count as occluded.
+        let near = 0.5 * mesh.patch_size;
+        let mut occluded = 0f64;
+        for k in 0..rays {
+            let (x, n) = patch_point(mesh, i, k, rays, pat_pos);
+            let d = Frame::from_normal(n.to_normal())
+                .to_world(warp::square_to_cosine_hemisphere(cmj(k, rays, pat_dir)));
+            let mut ray = Ray::spawn(x, n.to_normal(), d);
+            let mut w = w0;
+            for depth in 0..=MAX_SPECULAR {
+                let Some(hit) = scene.intersect(&ray, &mut stats) else {
                     break;
                 };
-                w *= s.weight.average().max(0.0) as f64;
-                if !(w > 0.0) || depth == MAX_SPECULAR {
-                    break;
-                }
-                ray = si.spawn_ray(s.wi);
-                continue;
-            }
-            let Some((e, _)) = mesh.locate(&hit, &si) else {
-                // Not meshed (CSG): an absorber.
-                if depth == 0 && hit.t * ray.d.norm() >= near {
+                let si = scene.geometry.interaction(&ray, &hit);
+                if depth == 0 && hit.t * ray.d.norm() < near {
                     occluded += w0;
                 }
+                let m = si.props.material as usize;
+                if traced.get(m).copied().unwrap_or(false) {
+                    // Follow the specular bounce with its mean weight.
+                    let mat = &scene.materials[m];
+                    let bsdf = mat.bsdf(si.shading_frame(), si.uv);
+                    let Some(s) = bsdf.sample(si.wo, sampler.next_1d(), sampler.next_2d()) else {
+                        break;
+                    };
+                    w *= s.weight.average().max(0.0) as f64;
+                    if !(w > 0.0) || depth == MAX_SPECULAR {
+                        break;
+                    }
+                    ray = si.spawn_ray(s.wi);
+                    continue;
+                }
+                let Some((e, _)) = mesh.locate(&hit, &si) else {
+                    // Not meshed (CSG): an absorber.
+                    if depth == 0 && hit.t * ray.d.norm() >= near {
+                        occluded += w0;
+                    }
+                    break;
+                };
+                let side = if si.n.dot_vec(ray.d) < 0.0 { 0 } else { 1 };
+                let j = mesh.elements[e as usize].patch[side];
+                if depth == 0 && j == NONE && hit.t * ray.d.norm() >= near {
+                    occluded += w0;
+                }
+                // Direct exchanges with emitters are estimated explicitly below.
+                if j != NONE && j != i && !(depth == 0 && (is_emitter(j) || is_emitter(i))) {
+                    acc.add(j, w);
+                }
                 break;
-            };
-            let side = if si.n.dot_vec(ray.d) < 0.0 { 0 } else { 1 };
-            let j = mesh.elements[e as usize].patch[side];
-            if depth == 0 && j == NONE && hit.t * ray.d.norm() >= near {
-                occluded += w0;
             }
-            // Direct exchanges with emitters are estimated explicitly below.
-            if j != NONE && j != i && !(depth == 0 && (is_emitter(j) || is_emitter(i))) {
-                acc.add(j, w);
-            }
-            break;
         }
-    }
-    if let Some(list) = emitters {
-        if is_emitter(i) {
-            // An emitter's row (what progressive refinement shoots with) by reciprocity from
-            // the receivers' explicit estimates: A_i F_ij = A_j F_ji.
-            let ai = mesh.patches[i as usize].area;
-            for j in 0..mesh.patches.len() as u32 {
-                if j == i {
-                    continue;
+        if let Some(list) = emitters {
+            if is_emitter(i) {
+                // An emitter's row (what progressive refinement shoots with) by reciprocity from
+                // the receivers' explicit estimates: A_i F_ij = A_j F_ji.
+                let ai = mesh.patches[i as usize].area;
+                for j in 0..mesh.patches.len() as u32 {
+                    if j == i {
+                        continue;
+                    }
+                    let f = explicit(scene, mesh, j, i, seed, &mut stats);
+                    if f > 0.0 {
+                        acc.add(j, f * mesh.patches[j as usize].area / ai);
+                    }
                 }
-                let f = explicit(scene, mesh, j, i, seed, &mut stats);
-                if f > 0.0 {
-                    acc.add(j, f * mesh.patches[j as usize].area / ai);
-                }
-            }
-        } else {
-            for &j in list {
-                if j == i {
-                    continue;
-                }
-                let f = explicit(scene, mesh, i, j, seed, &mut stats);
-                if f > 0.0 {
-                    acc.add(j, f);
+            } else {
+                for &j in list {
+                    if j == i {
+                        continue;
+                    }
+                    let f = explicit(scene, mesh, i, j, seed, &mut stats);
+                    if f > 0.0 {
+                        acc.add(j, f);
+                    }
                 }
             }
         }
+        let mut row = acc.finish();
+        row.occluded = occluded as f32;
+        row
     }
-    let mut row = acc.finish();
-    row.occluded = occluded as f32;
-    row
 }
 
 /// The form factor from patch `i` to the emitting patch `j` by point pairs (the same pairs

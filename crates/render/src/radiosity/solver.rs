@@ -17,8 +17,9 @@
 //!   Σ A_i |ΔB_i|₁ / Σ A_i |S_i|₁ (an upper bound of the residual above, since ρ < 1 and
 //!   Σ_i A_i F_ij ≤ A_j) is below the threshold.
 
-use super::formfactor::{reciprocity, Engine, Row, RowStats};
+use super::formfactor::Engine;
 use super::mesh::Patch;
+use super::row::{reciprocity, Row, RowStats};
 use std::collections::{HashMap, VecDeque};
 
 /// What a solve found.

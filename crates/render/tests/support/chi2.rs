@@ -233,7 +233,8 @@ impl Chi2<'_> {
         // 4 × 4 and 3 × 3 Gauss–Legendre on a rectangle of (s, φ) (their difference estimates
         // the error), and whether it may straddle a step of the density (the edge of its
         // support, a jump by more than 8× such as a texel's edge).
-        let gauss = |s0: f64, s1: f64, p0: f64, p1: f64, bad: &mut Option<(Vec3, f32)>| -> Quad {
+        let gauss = |r: Rect, bad: &mut Option<(Vec3, f32)>| -> Quad {
+            let Rect { s0, s1, p0, p1 } = r;
             let (hs, hp) = (0.5 * (s1 - s0), 0.5 * (p1 - p0));
             let (ms, mp) = (0.5 * (s1 + s0), 0.5 * (p1 + p0));
             let (mut g4, mut g3, mut lo, mut hi) = (0.0, 0.0, f64::INFINITY, 0f64);
@@ -268,11 +269,17 @@ impl Chi2<'_> {
                     for j in 0..k {
                         let (a, b) = (s0 + i as f64 * hs, s0 + (i + 1) as f64 * hs);
                         let (c, d) = (p0 + j as f64 * hp, p0 + (j + 1) as f64 * hp);
-                        let whole = gauss(a, b, c, d, bad);
+                        let rect = Rect {
+                            s0: a,
+                            s1: b,
+                            p0: c,
+                            p1: d,
+                        };
+                        let whole = gauss(rect, bad);
                         // Tolerance on the count: 5 % of its standard deviation, at least 1e-3
                         // samples.
                         let tol = (0.05 * (whole.g4.abs() * n as f64).sqrt()).max(1e-3) / n as f64;
-                        sum += adaptive(&gauss, a, b, c, d, whole, tol, 0, bad);
+                        sum += adaptive(&gauss, rect, whole, tol, 0, bad);
                     }
                 }
                 sum
@@ -382,6 +389,15 @@ impl Chi2<'_> {
     }
 }
 
+/// A rectangle of the (s, φ) domain: s in [s0, s1], φ in [p0, p1].
+#[derive(Clone, Copy)]
+struct Rect {
+    s0: f64,
+    s1: f64,
+    p0: f64,
+    p1: f64,
+}
+
 /// The two cubatures of a rectangle and whether it may straddle a step.
 #[derive(Clone, Copy)]
 struct Quad {
@@ -395,11 +411,8 @@ struct Quad {
 /// the error halves per level). Rectangles that may straddle a step of the density are split at
 /// least three times: there the two rules can agree by chance (both are staircases of the step).
 fn adaptive(
-    gauss: &impl Fn(f64, f64, f64, f64, &mut Option<(Vec3, f32)>) -> Quad,
-    s0: f64,
-    s1: f64,
-    p0: f64,
-    p1: f64,
+    gauss: &impl Fn(Rect, &mut Option<(Vec3, f32)>) -> Quad,
+    r: Rect,
     q: Quad,
     tol: f64,
     depth: u32,
@@ -408,6 +421,7 @@ fn adaptive(
     if depth >= 7 || ((q.g4 - q.g3).abs() <= tol && !(q.step && depth < 3)) {
         return q.g4;
     }
+    let Rect { s0, s1, p0, p1 } = r;
     let (sm, pm) = (0.5 * (s0 + s1), 0.5 * (p0 + p1));
     [
         (s0, sm, p0, pm),
@@ -416,9 +430,10 @@ fn adaptive(
         (sm, s1, pm, p1),
     ]
     .iter()
-    .map(|&(a, b, c, d)| {
-        let q = gauss(a, b, c, d, bad);
-        adaptive(gauss, a, b, c, d, q, 0.5 * tol, depth + 1, bad)
+    .map(|&(s0, s1, p0, p1)| {
+        let r = Rect { s0, s1, p0, p1 };
+        let q = gauss(r, bad);
+        adaptive(gauss, r, q, 0.5 * tol, depth + 1, bad)
     })
     .sum()
 }
