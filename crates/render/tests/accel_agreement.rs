@@ -1,7 +1,9 @@
 //! Every acceleration structure returns exactly the closest hit of the linear list: the same
 //! primitive, t, normal and uv, bit for bit (property test over random scenes and rays).
 
-mod common;
+mod support;
+
+use support::scenes;
 
 use candela_render::accel::AccelKind;
 use candela_render::math::{Ray, Vec3};
@@ -17,18 +19,18 @@ const STRUCTURES: &[AccelKind] = &[
 ];
 
 fn agree(seed: u64, n: usize, rays: usize) {
-    let reference = common::random_scene(seed, n, AccelKind::None);
+    let reference = scenes::random_scene(seed, n, AccelKind::None);
     let mut st = RayStats::default();
     for &kind in STRUCTURES {
-        let scene = common::random_scene(seed, n, kind);
+        let scene = scenes::random_scene(seed, n, kind);
         let mut rng = Pcg32::new(seed, 99);
         for i in 0..rays {
-            let o = common::point(&mut rng, 14.0);
+            let o = scenes::point(&mut rng, 14.0);
             // Half the rays are aimed at the centre of the scene, half are random.
             let d = if i % 2 == 0 {
-                -o.to_vec() + common::point(&mut rng, 3.0).to_vec()
+                -o.to_vec() + scenes::point(&mut rng, 3.0).to_vec()
             } else {
-                common::direction(&mut rng)
+                scenes::direction(&mut rng)
             };
             let mut ray = Ray::new(o, d);
             if i % 5 == 0 {
@@ -57,10 +59,10 @@ fn agree(seed: u64, n: usize, rays: usize) {
 fn structures_agree_on_a_scene_with_duplicates() {
     agree(1, 400, 4000);
     // Rays along the axes, through the duplicated sphere.
-    let reference = common::random_scene(2, 50, AccelKind::None);
+    let reference = scenes::random_scene(2, 50, AccelKind::None);
     let mut st = RayStats::default();
     for &kind in STRUCTURES {
-        let scene = common::random_scene(2, 50, kind);
+        let scene = scenes::random_scene(2, 50, kind);
         for d in [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X] {
             let r = Ray::new(
                 candela_render::math::Point3::new(0.5, 0.5, 0.5) - d * 20.0,
@@ -247,10 +249,10 @@ fn structures_agree_on_axis_aligned_scenes_and_secondary_rays() {
                 let o = if i % 2 == 0 {
                     Point3::new(q(&mut rng), q(&mut rng), q(&mut rng))
                 } else {
-                    common::point(&mut rng, 9.0)
+                    scenes::point(&mut rng, 9.0)
                 };
                 let d = match i % 3 {
-                    0 => common::direction(&mut rng),
+                    0 => scenes::direction(&mut rng),
                     1 => {
                         let t = Point3::new(q(&mut rng), q(&mut rng), q(&mut rng));
                         t - o
@@ -273,7 +275,7 @@ fn structures_agree_on_axis_aligned_scenes_and_secondary_rays() {
                     );
                     let Some(h) = a else { break };
                     let si = reference.geometry.interaction(&ray, &h);
-                    ray = si.spawn_ray(common::direction(&mut rng));
+                    ray = si.spawn_ray(scenes::direction(&mut rng));
                 }
             }
         }

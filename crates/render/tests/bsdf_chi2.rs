@@ -5,8 +5,9 @@
 //! All BSDFs are evaluated in a tilted shading frame, so that the world ↔ local conversions of
 //! `Bsdf` are exercised too.
 
-#[path = "support/chi2.rs"]
-mod chi2;
+mod support;
+
+use support::chi2;
 
 use candela_render::material::{
     Bsdf, Distribution, Lobe, Material, Microfacet, Model, RoughCoating,

@@ -5,8 +5,9 @@
 //! Scenes hold one emitter and use the linear-list accelerator, so that these tests depend on
 //! the lights alone.
 
-#[path = "support/chi2.rs"]
-mod chi2;
+mod support;
+
+use support::chi2;
 
 use std::sync::Arc;
 

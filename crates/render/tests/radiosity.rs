@@ -1,7 +1,7 @@
 //! Radiosity: form factors against closed forms, closed rooms, the furnace, the two solvers,
 //! reciprocity, the Cornell box against the path tracer, the cache, and degenerate scenes.
 
-mod radiosity_support;
+mod support;
 
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
@@ -17,9 +17,9 @@ use candela_render::radiosity::{
 use candela_render::shape::{Disk, Mesh, Shape, Sphere};
 use candela_render::texture::Texture;
 use candela_render::{Rgb, Scene, SceneBuilder};
-use radiosity_support::*;
 use std::f64::consts::PI;
 use std::sync::Arc;
+use support::radiosity::*;
 
 const METHODS: [FormFactorMethod; 2] = [FormFactorMethod::Hemicube, FormFactorMethod::RayCast];
 

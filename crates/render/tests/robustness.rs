@@ -1,6 +1,8 @@
 //! Rays leaving a surface never re-hit it by round-off, and closed meshes do not leak.
 
-mod common;
+mod support;
+
+use support::scenes;
 
 use candela_render::accel::AccelKind;
 use candela_render::material::Material;
@@ -89,8 +91,8 @@ fn spawned_rays_never_rehit_their_surface() {
         let scene = b.build(AccelKind::Bvh);
         let mut points = 0;
         while points < 2000 {
-            let o = centre + common::direction(&mut rng) * (radius * 2.0);
-            let target = centre + common::point(&mut rng, radius * 0.3).to_vec();
+            let o = centre + scenes::direction(&mut rng) * (radius * 2.0);
+            let target = centre + scenes::point(&mut rng, radius * 0.3).to_vec();
             let first_ray = Ray::new(o, target - o);
             let Some(first) = scene.intersect(&first_ray, &mut st) else {
                 continue;
@@ -98,7 +100,7 @@ fn spawned_rays_never_rehit_their_surface() {
             let si = scene.geometry.interaction(&first_ray, &first);
             points += 1;
             for _ in 0..4 {
-                let d = common::direction(&mut rng);
+                let d = scenes::direction(&mut rng);
                 let outward = si.n.dot_vec(d) > 0.0;
                 let r = si.spawn_ray(d);
                 match scene.intersect(&r, &mut st) {
@@ -141,7 +143,7 @@ fn closed_meshes_are_watertight() {
     let mut rng = Pcg32::new(8, 9);
     let mut st = RayStats::default();
     for i in 0..100_000 {
-        let o = common::point(&mut rng, 0.3);
+        let o = scenes::point(&mut rng, 0.3);
         // Aim some rays exactly at vertices and edge midpoints, where leaks happen.
         let d = match i % 3 {
             0 => vertices[rng.next_bounded(vertices.len() as u32) as usize] - o,
@@ -150,7 +152,7 @@ fn closed_meshes_are_watertight() {
                 let b = vertices[rng.next_bounded(vertices.len() as u32) as usize];
                 a.lerp(b, 0.5) - o
             }
-            _ => common::direction(&mut rng),
+            _ => scenes::direction(&mut rng),
         };
         assert!(
             scene.intersect(&Ray::new(o, d), &mut st).is_some(),

@@ -4,8 +4,9 @@
 //! conductors against the Mitsuba import's RGB values, and the unbiasedness of hero-wavelength
 //! estimators, with and without terminated secondary wavelengths.
 
-#[path = "support/chi2.rs"]
-mod chi2;
+mod support;
+
+use support::chi2;
 
 use candela_render::spectrum::cie::{integrate_xyz, xyz_to_linear_srgb_f64, xyz_to_xy};
 use candela_render::spectrum::*;

@@ -1,15 +1,25 @@
-//! Measurements of the radiosity integrator (ignored by default; run with
-//! `cargo test --test radiosity_experiments -- --ignored --nocapture`): the Cornell box against
-//! the path tracer and Mitsuba's reference, and timing and memory against the patch count.
+//! Measurements of the radiosity integrator: the Cornell box against the path tracer and
+//! Mitsuba's reference, and timing and memory against the patch count. Each experiment prints
+//! what it measures (and may write PFM images into the current directory):
+//!
+//! ```text
+//! cargo run --release -p candela-render --example radiosity_experiments -- NAME
+//! ```
+//!
+//! Without a name it lists the experiments. The Mitsuba reference is read from
+//! `../shared/bench/` beside the repository (`CANDELA_BENCH` overrides it).
 
-mod radiosity_support;
+#[path = "../tests/support/radiosity.rs"]
+mod support;
+
+use candela_render::Image;
 
 use candela_render::accel::AccelKind;
 use candela_render::integrator::Path;
 use candela_render::radiosity::{FormFactorMethod, Radiosity, RadiosityOptions, SolverKind};
 use candela_render::Scene;
-use radiosity_support::*;
 use std::time::Instant;
+use support::*;
 
 fn opts(
     h: Option<f32>,
@@ -66,8 +76,6 @@ fn configs() -> Vec<Config> {
         .collect()
 }
 
-#[test]
-#[ignore]
 fn cornell_means() {
     let scene = cornell(AccelKind::Bvh);
     let res = 128;
@@ -95,25 +103,23 @@ fn cornell_means() {
     }
 }
 
-#[test]
-#[ignore]
 fn cornell_pictures() {
     let scene = cornell(AccelKind::Bvh);
     let res = 128;
     let mask = emitter_mask(&scene, res);
     let pt = image(&scene, &Path::default(), res, 64);
-    write_pfm("/tmp/rad_pt.pfm", &pt);
+    write_pfm("rad_pt.pfm", &pt);
     let rad = Radiosity::solve(
         &scene,
         &opts(None, FormFactorMethod::Hemicube, SolverKind::GaussSeidel, 0),
     );
-    write_pfm("/tmp/rad_hc.pfm", &image(&scene, &rad, res, 1));
+    write_pfm("rad_hc.pfm", &image(&scene, &rad, res, 1));
     let rad = Radiosity::solve(
         &scene,
         &opts(None, FormFactorMethod::RayCast, SolverKind::GaussSeidel, 0),
     );
-    write_pfm("/tmp/rad_rc.pfm", &image(&scene, &rad, res, 1));
-    if let Some(r) = read_pfm("/work/shared/bench/cornell-reference-unlimited-depth-256.pfm") {
+    write_pfm("rad_rc.pfm", &image(&scene, &rad, res, 1));
+    if let Some(r) = read_pfm(&bench("cornell-reference-unlimited-depth-256.pfm")) {
         let m = emitter_mask(&scene, 256);
         println!(
             "reference masked mean {:?} full {:?}",
@@ -124,8 +130,6 @@ fn cornell_pictures() {
     println!("pt {:?}", masked_mean(&pt, &mask));
 }
 
-#[test]
-#[ignore]
 fn cornell_light_form_factors() {
     let scene = cornell(AccelKind::Bvh);
     for ff in [FormFactorMethod::Hemicube, FormFactorMethod::RayCast] {
@@ -159,8 +163,6 @@ fn cornell_light_form_factors() {
     }
 }
 
-#[test]
-#[ignore]
 fn cornell_profile() {
     let scene = cornell(AccelKind::Bvh);
     let h: Option<f32> = std::env::var("RAD_H").ok().and_then(|s| s.parse().ok());
@@ -207,8 +209,6 @@ fn cornell_profile() {
     );
 }
 
-#[test]
-#[ignore]
 fn cornell_images() {
     let scene = cornell(AccelKind::Bvh);
     for (k, cfg) in configs().iter().enumerate() {
@@ -220,15 +220,10 @@ fn cornell_images() {
             o.display = candela_render::radiosity::DisplayMode::FinalGather(n.parse().unwrap());
         }
         let rad = Radiosity::solve(&scene, &o);
-        write_pfm(
-            &format!("/tmp/rad_img{k}.pfm"),
-            &image(&scene, &rad, 256, 1),
-        );
+        write_pfm(&format!("rad_img{k}.pfm"), &image(&scene, &rad, 256, 1));
     }
 }
 
-#[test]
-#[ignore]
 fn furnace_debug() {
     let scene = closed_box_with(
         0.6,
@@ -253,8 +248,6 @@ fn furnace_debug() {
     }
 }
 
-#[test]
-#[ignore]
 fn point_light_debug() {
     use candela_render::light::{Components, Light, PointLight};
     use candela_render::math::{Point3, Transform, Vec3};
@@ -292,8 +285,6 @@ fn point_light_debug() {
     let _ = Vec3::X;
 }
 
-#[test]
-#[ignore]
 fn mirror_debug() {
     let scene = cornell_with_mirror();
     let r = Radiosity::solve(
@@ -306,11 +297,9 @@ fn mirror_debug() {
         },
     );
     let img = image(&scene, &r, 128, 1);
-    write_pfm("/tmp/rad_mirror.pfm", &img);
+    write_pfm("rad_mirror.pfm", &img);
 }
 
-#[test]
-#[ignore]
 fn furnace_errors() {
     let scene = closed_box_with(
         0.6,
@@ -355,12 +344,9 @@ fn furnace_errors() {
 }
 
 /// The Cornell box at 256 × 256 against Mitsuba's reference with unlimited depth
-/// (../shared/bench/cornell-reference-unlimited-depth-256.pfm), emitter pixels masked.
-#[test]
-#[ignore]
+/// (`cornell-reference-unlimited-depth-256.pfm` of the bench folder), emitter pixels masked.
 fn cornell_against_mitsuba_reference() {
-    let Some(reference) = read_pfm("/work/shared/bench/cornell-reference-unlimited-depth-256.pfm")
-    else {
+    let Some(reference) = read_pfm(&bench("cornell-reference-unlimited-depth-256.pfm")) else {
         println!("no reference");
         return;
     };
@@ -398,16 +384,12 @@ fn cornell_against_mitsuba_reference() {
     }
 }
 
-#[test]
-#[ignore]
 fn cornell_difference_image() {
     let scene = cornell(AccelKind::Bvh);
     let rad = Radiosity::solve(&scene, &config_opts(&configs()[0]));
-    write_pfm("/tmp/rad_256.pfm", &image(&scene, &rad, 256, 16));
+    write_pfm("rad_256.pfm", &image(&scene, &rad, 256, 16));
 }
 
-#[test]
-#[ignore]
 fn cornell_convergence_64() {
     let scene = cornell(AccelKind::Bvh);
     let res = 64;
@@ -426,6 +408,60 @@ fn cornell_convergence_64() {
                 r.len(),
                 rel_diff(m, path)
             );
+        }
+    }
+}
+
+/// A file of the bench folder (`CANDELA_BENCH`, or `../shared/bench` beside the repository).
+fn bench(name: &str) -> String {
+    let dir = std::env::var("CANDELA_BENCH")
+        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/bench").into());
+    format!("{dir}/{name}")
+}
+
+/// Writes `img` as PFM (a note on failure: the experiments are measurements, not tests).
+fn write_pfm(path: &str, img: &Image) {
+    if let Err(e) = std::fs::write(path, candela_imageio::write_pfm(img)) {
+        eprintln!("cannot write {path}: {e}");
+    }
+}
+
+/// Reads a PFM, or `None` with a note when it cannot be read.
+fn read_pfm(path: &str) -> Option<Image> {
+    candela_imageio::read_pfm_file(std::path::Path::new(path))
+        .map_err(|e| eprintln!("cannot read {path}: {e}"))
+        .ok()
+}
+
+/// The experiments by name.
+const EXPERIMENTS: &[(&str, fn())] = &[
+    ("cornell_means", cornell_means),
+    ("cornell_pictures", cornell_pictures),
+    ("cornell_light_form_factors", cornell_light_form_factors),
+    ("cornell_profile", cornell_profile),
+    ("cornell_images", cornell_images),
+    ("furnace_debug", furnace_debug),
+    ("point_light_debug", point_light_debug),
+    ("mirror_debug", mirror_debug),
+    ("furnace_errors", furnace_errors),
+    (
+        "cornell_against_mitsuba_reference",
+        cornell_against_mitsuba_reference,
+    ),
+    ("cornell_difference_image", cornell_difference_image),
+    ("cornell_convergence_64", cornell_convergence_64),
+];
+
+fn main() {
+    let name = std::env::args().nth(1).unwrap_or_default();
+    match EXPERIMENTS.iter().find(|(n, _)| *n == name) {
+        Some((_, run)) => run(),
+        None => {
+            eprintln!("usage: radiosity_experiments NAME, one of:");
+            for (n, _) in EXPERIMENTS {
+                eprintln!("  {n}");
+            }
+            std::process::exit(if name.is_empty() { 0 } else { 2 });
         }
     }
 }
