@@ -87,7 +87,7 @@ impl Camera {
         )
     }
 
-    /// The ray through the screen point (u, v) ∈ [0,1]²: u = 0 is the left edge, v = 0 the bottom.
+    /// The ray through the screen point (u, v) ∈ \[0, 1\]²: u = 0 is the left edge, v = 0 the bottom.
     #[inline]
     pub fn ray(&self, u: f32, v: f32) -> Ray {
         let sy = (1.0 - 2.0 * u) * self.aspect_ratio;

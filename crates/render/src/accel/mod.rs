@@ -17,8 +17,8 @@
 //! smaller primitive id. A recently tested primitive is not tested again (a small mailbox).
 //!
 //! The [`Bvh`] (the default) is the fast one: 8-wide nodes and blocks of four triangles tested
-//! with SIMD ([`crate::simd`], AVX2 chosen at run time). With the cargo feature `embree`, Intel
-//! Embree 3 is available too ([`AccelKind::Embree`]) for comparisons; it is not bit-identical.
+//! with SIMD (the `simd` module, AVX2 chosen at run time). With the cargo feature `embree`, Intel
+//! Embree 3 is available too (`AccelKind::Embree`) for comparisons; it is not bit-identical.
 
 mod bvh;
 #[cfg(feature = "embree")]

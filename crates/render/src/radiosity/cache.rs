@@ -112,15 +112,23 @@ pub(crate) fn fingerprint(scene: &Scene, opts: &RadiosityOptions, patch_size: f3
 /// What a cache holds.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct CacheData {
+    /// The fingerprint of the scene and options it was solved for.
     pub fingerprint: u64,
+    /// Elements of the refined mesh.
     pub elements: u32,
+    /// Patches of the refined mesh.
     pub patches: u32,
+    /// Elements split by refinement, in order.
     pub splits: Vec<u32>,
+    /// Radiosity per patch.
     pub b: Vec<[f64; 3]>,
     /// Patches whose centre is hidden (display weights).
     pub hidden: Vec<bool>,
+    /// Sweeps or shots of the solve.
     pub iterations: u64,
+    /// Relative residual reached.
     pub residual: f64,
+    /// Whether it reached the threshold.
     pub converged: bool,
 }
 

@@ -29,7 +29,9 @@ const MAX_SPECULAR: u32 = 16;
 /// Per-patch display values: reflected radiance R/π at the corners and at the centre.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Shading {
+    /// Per patch: the reflected radiosity averaged at its corners (Gouraud).
     pub corners: Vec<[Rgb; 4]>,
+    /// Per patch: its own reflected radiosity.
     pub flat: Vec<Rgb>,
 }
 
@@ -178,8 +180,11 @@ pub(crate) enum Mode {
 /// The display part of the radiosity integrator.
 #[derive(Clone, Debug)]
 pub(crate) struct Display {
+    /// Per-patch colours.
     pub shading: Shading,
+    /// Per material: traced through at display time (mirrors, glass).
     pub traced: Vec<bool>,
+    /// How the solution is shown.
     pub mode: Mode,
 }
 

@@ -5,7 +5,9 @@
 /// One row of the form-factor matrix.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Row {
+    /// Column indices j, sorted.
     pub cols: Vec<u32>,
+    /// F_ij for each column.
     pub vals: Vec<f32>,
     /// The part of the patch's hemisphere covered by surfaces without a patch on the side it
     /// sees (the back of a one-sided surface, the inside of a solid) or closer than half the
@@ -87,9 +89,13 @@ impl RowAcc {
 /// Quality statistics of a set of rows.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct RowStats {
+    /// Rows counted.
     pub rows: u64,
+    /// Smallest row sum.
     pub sum_min: f64,
+    /// Largest row sum.
     pub sum_max: f64,
+    /// Sum of the row sums.
     pub sum_total: f64,
 }
 

@@ -25,14 +25,23 @@ use std::collections::{HashMap, VecDeque};
 /// What a solve found.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Solution {
+    /// Radiosity per patch.
     pub b: Vec<[f64; 3]>,
+    /// Sweeps (Gauss–Seidel) or shots (progressive).
     pub iterations: u64,
+    /// Relative residual reached.
     pub residual: f64,
+    /// Whether the residual reached the threshold.
     pub converged: bool,
+    /// Form-factor rows computed.
     pub rows_computed: u64,
+    /// Peak memory of stored rows, in bytes.
     pub row_bytes: usize,
+    /// Row-sum statistics.
     pub stats: RowStats,
+    /// Reciprocity: mean relative error, largest relative error, pairs checked.
     pub reciprocity: (f64, f64, u64),
+    /// Gauss–Seidel fell back to progressive refinement (the matrix was too large).
     pub fell_back: bool,
     /// Per patch: [`Row::occluded`] of its row, or −1 when its row was not computed.
     pub occluded: Vec<f32>,

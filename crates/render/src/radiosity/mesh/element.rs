@@ -8,6 +8,7 @@ use crate::radiosity::NONE;
 /// A node of the element forest.
 #[derive(Clone, Debug)]
 pub(crate) struct Element {
+    /// The surface it lies on.
     pub surface: u32,
     /// Quad domains: (s0, t0, s1, t1). Triangle domains: unused.
     pub rect: [f32; 4],
@@ -65,9 +66,11 @@ impl Element {
 /// A patch: one side of a leaf element, with its Lambertian data.
 #[derive(Clone, Debug)]
 pub(crate) struct Patch {
+    /// The leaf element it is a side of.
     pub elem: u32,
     /// 0 front, 1 back.
     pub side: u8,
+    /// Area.
     pub area: f64,
     /// Reflectance ρ per channel.
     pub rho: [f64; 3],
@@ -75,6 +78,7 @@ pub(crate) struct Patch {
     pub emit: [f64; 3],
     /// The centre on the true surface and the unit normal of this side.
     pub centre: Point3,
+    /// Unit normal of its side.
     pub normal: Vec3,
 }
 

@@ -43,18 +43,23 @@ use crate::shape::Shape;
 /// The scene cut into elements and patches.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Meshing {
+    /// Every surface of the scene.
     pub surfaces: Vec<Surface>,
+    /// Every element (the nodes of the subdivision forests).
     pub elements: Vec<Element>,
     /// Per scene primitive: first surface and count.
     pub prim_surfaces: Vec<(u32, u32)>,
+    /// The patches (sides of leaf elements that take part).
     pub patches: Vec<Patch>,
     /// Elements split by adaptive refinement, in order (replayed when loading a cache).
     pub splits: Vec<u32>,
     /// Root elements (before refinement).
     pub base_elements: usize,
+    /// The largest patch edge used.
     pub patch_size: f32,
     /// The scene's size (bounding-box diagonal, or 10 when unbounded or empty).
     pub scale: f32,
+    /// Approximations worth telling the user about.
     pub warnings: Vec<String>,
 }
 

@@ -167,17 +167,23 @@ pub(crate) enum TexMap {
 /// A surface of the scene and its root elements.
 #[derive(Clone, Debug)]
 pub(crate) struct Surface {
+    /// How (s, t) maps to the world.
     pub map: SurfaceMap,
+    /// What it comes from.
     pub kind: SurfaceKind,
+    /// How its texture coordinates follow from (s, t).
     pub tex: TexMap,
     /// The scene primitive.
     pub prim: u32,
     /// Sub-index within the primitive (box face, polyhedron plane).
     pub face: u32,
+    /// Material, emission, light.
     pub props: SurfaceProps,
     /// First root element and the root grid (triangles: 1 × 1).
     pub first_root: u32,
+    /// Root elements along s.
     pub nu: u32,
+    /// Root elements along t.
     pub nv: u32,
     /// Whether each side (front, back) gets patches.
     pub active: [bool; 2],
