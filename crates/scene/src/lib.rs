@@ -5,15 +5,18 @@
 //! - [`builder`]: the description → a render scene, validating files and geometry.
 //! - [`mesh`]: OBJ and PLY meshes.
 //! - [`mitsuba`]: Mitsuba 3 XML import.
+//! - [`loaded`]: what loading needs and produces, shared by both formats.
 //! - [`load`]: loading either format, and the built-in demo scene.
 
 pub mod builder;
 pub mod error;
 pub mod lang;
 pub mod load;
+pub mod loaded;
 pub mod mesh;
 pub mod mitsuba;
 
 pub use error::{Pos, SceneError, SourceFile};
 pub use lang::{parse_define, parse_scene, parse_scene_file, SceneDescription};
-pub use load::{demo_scene, load_scene, LoadOptions, LoadedScene, RenderHints, DEMO_SCENE};
+pub use load::{demo_scene, load_scene, DEMO_SCENE};
+pub use loaded::{LoadOptions, LoadedScene, RenderHints};

@@ -44,7 +44,7 @@ mod xml;
 use self::math::M4;
 use self::xml::{Element, Props};
 use crate::error::{Pos, SceneError, SourceFile};
-use crate::load::{LoadOptions, LoadedScene, RenderHints};
+use crate::loaded::{LoadOptions, LoadedScene, RenderHints};
 use candela_render::camera::{Camera, Lens};
 use candela_render::light::{
     Components, DistantLight, Environment, Falloff, Light, PointLight, SpotLight, SpotProfile,
