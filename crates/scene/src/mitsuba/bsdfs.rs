@@ -6,7 +6,8 @@
 //! have `int_ior` = bk7 (1.5046) and `ext_ior` = air (1.000277); plastics polypropylene (1.49);
 //! rough models use a Beckmann distribution with α = 0.1.
 
-use super::xml::{Element, Props, Value};
+use super::props::{Props, Value};
+use super::xml::Element;
 use super::{presets, Loader};
 use crate::error::{Pos, SceneError};
 use candela_render::material::{
