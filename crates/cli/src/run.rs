@@ -2,7 +2,7 @@
 
 use crate::args::{RenderArgs, SceneArgs, ToneArgs};
 use anyhow::{bail, Context, Result};
-use candela_imageio::{Encoding, ToneMap};
+use candela_imageio::{write_atomically, Encoding, ToneMap};
 use candela_render::accel::AccelKind;
 use candela_render::integrator::{IntegratorKind, IntegratorSettings};
 use candela_render::radiosity::{
@@ -173,32 +173,6 @@ fn radiosity_outcome(outcome: &RadiosityOutcome, args: &RenderArgs) -> Result<()
             .with_context(|| format!("--radiosity-cache '{}': cannot write it", path.display()))?;
     }
     Ok(())
-}
-
-/// Writes `bytes` to a temporary file beside `path`, flushes it and renames it onto `path`; on
-/// failure the temporary file is removed and an existing `path` is left as it was.
-fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    use std::io::Write as _;
-    let name = path
-        .file_name()
-        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"))?;
-    let mut temp_name = std::ffi::OsString::from(".");
-    temp_name.push(name);
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.subsec_nanos());
-    temp_name.push(format!(".tmp-{}-{nanos}", std::process::id()));
-    let temp = path.with_file_name(temp_name);
-    let result = std::fs::File::create_new(&temp).and_then(|mut f| {
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&temp, path)
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&temp);
-    }
-    result
 }
 
 /// The display gamma of rendered LDR images unless `--gamma` says otherwise.

@@ -5,11 +5,12 @@
 //! [`read_image`] and [`write_image`] cover the common case; the per-format modules offer
 //! in-memory codecs.
 //!
-//! Writing is atomic: the file is encoded fully in memory, written to a hidden temporary file
-//! in the target's directory, flushed to disk and renamed onto the target. On failure the
-//! temporary file is removed and an existing target is left untouched, so an interrupted or
-//! failed render never leaves a half-written image behind.
+//! Writing is atomic ([`atomic`]): the file is encoded fully in memory, written to a hidden
+//! temporary file in the target's directory, flushed to disk and renamed onto the target. On
+//! failure the temporary file is removed and an existing target is left untouched, so an
+//! interrupted or failed render never leaves a half-written image behind.
 
+pub mod atomic;
 pub mod error;
 pub mod exr;
 pub mod hdr;
@@ -17,16 +18,11 @@ pub mod pfm;
 pub mod png;
 pub mod tonemap;
 
-use std::{
-    ffi::OsString,
-    fs,
-    io::Write,
-    path::Path,
-    sync::atomic::{AtomicU64, Ordering},
-};
+use std::{fs, path::Path};
 
 use candela_render::{Image, Rgb};
 
+pub use atomic::write_atomically;
 pub use error::ImageError;
 pub use pfm::{read_pfm, read_pfm_file, write_pfm};
 pub use tonemap::{Encoding, ToneMap};
@@ -116,50 +112,13 @@ pub fn read_image(path: &Path) -> Result<Image, ImageError> {
 pub fn write_image(path: &Path, img: &Image, tonemap: &ToneMap) -> Result<(), ImageError> {
     let format = Format::from_path(path)?;
     let bytes = format.encode(img, tonemap).map_err(|e| e.in_file(path))?;
-    write_atomically(path, &bytes)
+    write_atomically(path, &bytes).map_err(|e| ImageError::io(path, e.stage)(e.source))
 }
 
 /// Reads and decodes `path` as `format`.
 pub(crate) fn read_as(path: &Path, format: Format) -> Result<Image, ImageError> {
     let bytes = fs::read(path).map_err(ImageError::io(path, "read"))?;
     format.decode(&bytes).map_err(|e| e.in_file(path))
-}
-
-/// Writes `bytes` to a temporary file beside `path`, flushes it and renames it onto `path`.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), ImageError> {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let Some(name) = path.file_name() else {
-        let cause = std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name");
-        return Err(ImageError::io(path, "write")(cause));
-    };
-    let mut temp_name = OsString::from(".");
-    temp_name.push(name);
-    temp_name.push(format!(
-        ".tmp-{}-{}",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let temp = path.with_file_name(temp_name);
-
-    let mut file = fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&temp)
-        .map_err(ImageError::io(path, "create temporary file"))?;
-    let result = file
-        .write_all(bytes)
-        .and_then(|()| file.sync_all())
-        .map_err(ImageError::io(path, "write"))
-        .and_then(|()| {
-            drop(file);
-            fs::rename(&temp, path)
-                .map_err(ImageError::io(path, "rename temporary file into place"))
-        });
-    if result.is_err() {
-        // Best effort: the original error is what matters.
-        let _ = fs::remove_file(&temp);
-    }
-    result
 }
 
 /// Fails with [`ImageError::EmptyImage`] or [`ImageError::TooLarge`] unless a
