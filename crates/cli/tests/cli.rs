@@ -1,9 +1,10 @@
 //! The `candela` command line, end to end: every example renders, errors are reported with
 //! positions or option names and leave no output, and images do not depend on thread counts.
 
-mod common;
+mod support;
 
-use common::{candela, repo, scratch, stderr};
+use candela_render::{Image, Rgb};
+use support::{candela, repo, scratch, stderr};
 
 /// Every scene of examples/ renders at a small size with its default integrator and with the
 /// preview ones.
@@ -171,11 +172,8 @@ fn images_do_not_depend_on_the_thread_count() {
 fn convert_tone_maps_by_the_course_formulas() {
     let dir = scratch("convert");
     let pfm = dir.join("grey.pfm");
-    let mut bytes = b"PF\n2 1\n-1.0\n".to_vec();
-    for _ in 0..6 {
-        bytes.extend(1.0f32.to_le_bytes());
-    }
-    std::fs::write(&pfm, bytes).unwrap();
+    let grey = Image::from_pixels(2, 1, vec![Rgb::WHITE; 2]).unwrap();
+    std::fs::write(&pfm, candela_imageio::write_pfm(&grey)).unwrap();
     let png = dir.join("grey.png");
     let o = candela(&["convert", pfm.to_str().unwrap(), png.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));

@@ -2,11 +2,11 @@
 //! Mitsuba XML), the options `--patch-size`, `--form-factors`, `--solver`, `--radiosity-cache`
 //! (saved, reused, detected as stale, recovered when corrupt), and errors naming the option.
 
-mod common;
+mod support;
 
-use common::{candela, repo, scratch, stderr};
 use std::path::Path;
 use std::process::Output;
+use support::{candela, repo, scratch, stderr};
 
 fn render(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     let mut args = vec![

@@ -4,27 +4,13 @@
 use candela_render::math::{Matrix4, Point3, Transform, Vec3};
 use candela_render::Rgb;
 use candela_scene::lang::*;
-use candela_scene::{Pos, SceneError};
+use candela_scene::Pos;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// Parses `text` as `scenes/test.txt` with the given overrides.
-fn parse_with(text: &str, overrides: &[(&str, f32)]) -> Result<SceneDescription, SceneError> {
-    let overrides = overrides.iter().map(|&(k, v)| (k.to_owned(), v)).collect();
-    parse_scene(text, Path::new("scenes/test.txt"), &overrides)
-}
+mod support;
 
-fn parse(text: &str) -> SceneDescription {
-    parse_with(text, &[]).unwrap_or_else(|e| panic!("{e}\n--- in ---\n{text}"))
-}
-
-/// `line:col: message` of the error `text` gives.
-fn error_of(text: &str) -> String {
-    match parse_with(text, &[]) {
-        Ok(_) => panic!("no error for:\n{text}"),
-        Err(e) => format!("{}: {}", e.pos.unwrap_or_default(), e.message),
-    }
-}
+use support::lang::{error_of, parse, parse_with};
 
 fn approx(a: Transform, b: Transform) -> bool {
     a.m.approx_eq(&b.m, 1e-5) && a.inv.approx_eq(&b.inv, 1e-4)

@@ -12,68 +12,13 @@ use candela_render::shape::Shape;
 use candela_render::stats::RayStats;
 use candela_render::texture::{Filter, ImageTexture, Texture};
 use candela_render::{Image, Rgb};
-use candela_scene::mitsuba::load_mitsuba;
-use candela_scene::{LoadOptions, LoadedScene, SceneError};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// A fresh folder for the files of one test.
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("candela-mitsuba-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod support;
 
-fn try_load_with(
-    path: &Path,
-    xml: &str,
-    defines: &[(&str, &str)],
-) -> Result<LoadedScene, SceneError> {
-    let opts = LoadOptions {
-        defines: defines
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect(),
-        ..LoadOptions::default()
-    };
-    load_mitsuba(path, xml, &opts)
-}
-
-fn load_at(path: &Path, xml: &str) -> LoadedScene {
-    try_load_with(path, xml, &[]).unwrap_or_else(|e| panic!("{e}\n--- in ---\n{xml}"))
-}
-
-fn load(xml: &str) -> LoadedScene {
-    load_at(Path::new("scenes/test.xml"), xml)
-}
-
-/// A scene with `body`.
-fn scene(body: &str) -> String {
-    format!("<scene version=\"3.0.0\">\n{body}\n</scene>")
-}
-
-/// `line:col: message` of the error that `xml` gives.
-fn error_of(xml: &str) -> String {
-    match try_load_with(Path::new("scenes/test.xml"), xml, &[]) {
-        Ok(_) => panic!("no error for:\n{xml}"),
-        Err(e) => {
-            // Every error renders with its position, the source line and a caret.
-            let shown = e.to_string();
-            assert!(shown.starts_with("scenes/test.xml:"), "{shown}");
-            format!(
-                "{}: {}",
-                e.pos.expect("an error with a position"),
-                e.message
-            )
-        }
-    }
-}
-
-/// Asserts that `xml` gives an error (`line:col: message`) starting with `prefix`.
-#[track_caller]
-fn assert_error_starts_with(xml: &str, prefix: &str) {
-    let e = error_of(xml);
-    assert!(e.starts_with(prefix), "{e}");
-}
+use support::mitsuba::{
+    assert_error_starts_with, error_of, load, load_at, scene, tmpdir, try_load_with,
+};
 
 fn close(a: Vec3, b: Vec3) -> bool {
     a.approx_eq(b, 1e-4)
