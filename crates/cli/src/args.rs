@@ -7,10 +7,12 @@ use std::path::PathBuf;
 #[derive(Parser, Debug)]
 #[command(name = "candela", version, about, propagate_version = true)]
 pub struct Cli {
+    /// What to do.
     #[command(subcommand)]
     pub command: Command,
 }
 
+/// The subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render the built-in demo scene.
@@ -21,14 +23,17 @@ pub enum Command {
     Convert(ConvertArgs),
 }
 
+/// `render`: a scene file and how to render it.
 #[derive(Args, Debug)]
 pub struct SceneArgs {
     /// The scene file.
     pub scene: PathBuf,
+    /// How to render it.
     #[command(flatten)]
     pub render: RenderArgs,
 }
 
+/// The options of `render` and `demo`.
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
     /// Output file, repeatable; the format follows the extension (.png, .pfm, .exr, .hdr).
@@ -61,7 +66,7 @@ pub struct RenderArgs {
     /// The seed of the random sequences (same seed, same image, any thread count).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Overrides a `float` variable (or a Mitsuba <default>): NAME=VALUE or NAME:VALUE.
+    /// Overrides a `float` variable (or a Mitsuba `<default>`): NAME=VALUE or NAME:VALUE.
     #[arg(short = 'd', long = "define", value_name = "NAME=VALUE")]
     pub defines: Vec<String>,
     /// Radiosity: largest patch edge (default from the scene's size).
@@ -85,10 +90,12 @@ pub struct RenderArgs {
     /// No progress bar.
     #[arg(long, short = 'q')]
     pub quiet: bool,
+    /// How LDR outputs are tone mapped.
     #[command(flatten)]
     pub tone: ToneArgs,
 }
 
+/// The tone-mapping options.
 #[derive(Args, Debug, Clone)]
 pub struct ToneArgs {
     /// Tone mapping: the key value a (course default 0.18).
@@ -106,12 +113,14 @@ pub struct ToneArgs {
     pub srgb: bool,
 }
 
+/// `convert`: an input and an output image.
 #[derive(Args, Debug)]
 pub struct ConvertArgs {
     /// The input image (.pfm, .exr, .hdr, .png).
     pub input: PathBuf,
     /// The output image (.pfm, .exr, .hdr, .png).
     pub output: PathBuf,
+    /// How an LDR output is tone mapped.
     #[command(flatten)]
     pub tone: ToneArgs,
 }

@@ -1,10 +1,11 @@
 //! Mitsuba 3 XML import (`.xml`), with Mitsuba's semantics so that the same file gives the same
 //! image within noise.
 //!
-//! The document is read in two passes. [`xml`] turns it into a tree of elements with their
-//! positions, substituting `$name` parameters in document order (`<default>`s, overridden by
-//! `-d NAME=VALUE`) and parsing every property value; then the loader walks the `<scene>`,
-//! resolving `<ref id>`s (to any id of the file) and building candela's scene:
+//! The document is read in two passes. The `xml` module turns it into a tree of elements with
+//! their positions, substituting `$name` parameters in document order (`<default>`s, overridden
+//! by `-d NAME=VALUE`), and `props` reads every property value; then the loader walks the
+//! `<scene>`, resolving `<ref id>`s (to any id of the file) and building candela's scene, one
+//! file per plugin family (`sensor`, `shapes`, `bsdfs`, `emitters`, `integrators`):
 //!
 //! - sensors `perspective` (`fov`/`focal_length`, `fov_axis`; Mitsuba's camera frame: +z forward,
 //!   +y up, +x to the left of the image), `thinlens` (depth of field), `orthographic`; film
