@@ -9,9 +9,10 @@
 //!
 //! Needs `libembree3` (Debian: `apt-get install libembree-dev`).
 
-// The Embree C API is reached through `extern "C"` declarations of the ~15 functions used;
-// calling them is unsafe. Every call passes handles that this module created and still owns
-// (released once, in `Drop`) and pointers to live, correctly laid-out `#[repr(C)]` values.
+// Why unsafe code is allowed in this file: the Embree C API is reached through `extern "C"`
+// declarations of the ~15 functions used, and calling them is unsafe. Every call passes
+// handles that this module created and still owns (released once, in `Drop`) and pointers to
+// live, correctly laid-out `#[repr(C)]` values.
 #![allow(unsafe_code)]
 
 use std::ffi::{c_char, c_void, CString};

@@ -1,6 +1,11 @@
-//! The layering rule, checked from the source: inside every crate of the workspace, no import
-//! cycle between the top-level modules of the crate, nor between sibling files or folders inside
-//! any folder.
+//! The architecture's rules (ARCHITECTURE.md), checked from the source:
+//! - inside every crate, no import cycle between the top-level modules, nor between sibling
+//!   files or folders inside any folder;
+//! - the layer diagram of ARCHITECTURE.md: every top-level module uses only modules on lower
+//!   lines;
+//! - the code map of ARCHITECTURE.md names every source file and folder, and only existing ones;
+//! - the render core does no I/O;
+//! - every file with `unsafe` code allows it explicitly and says why.
 //!
 //! The graph is drawn from the code itself: `use` trees, and inline `crate::…`, `super::…` and
 //! `self::…` paths, test modules (`#[cfg(test)]`) left out. Each path is resolved to the module
@@ -27,8 +32,13 @@ struct Crate {
     refs: Vec<(ModPath, ModPath)>,
 }
 
+/// The repository's root.
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
 fn workspace_crates() -> Vec<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let root = repo().join("crates");
     let mut dirs: Vec<PathBuf> = fs::read_dir(&root)
         .expect("crates/ is readable")
         .map(|e| e.expect("a directory entry").path())
@@ -665,4 +675,243 @@ fn the_checker_sees_a_cycle() {
     fs::remove_dir_all(&dir).unwrap();
     assert_eq!(cycles.len(), 1, "{cycles:?}");
     assert!(cycles[0].contains("a::{a::x, a::y}"), "{}", cycles[0]);
+}
+
+impl Crate {
+    /// Dependencies between distinct top-level modules (the crate root's own items left out).
+    fn top_level_edges(&self) -> BTreeSet<(String, String)> {
+        let mut edges = BTreeSet::new();
+        for (from, to) in &self.refs {
+            let mut f = from.clone();
+            while !self.modules.contains(&f) {
+                f.pop();
+            }
+            let t = self.defining_module(to);
+            if let (Some(a), Some(b)) = (f.first(), t.first()) {
+                if a != b {
+                    edges.insert((a.clone(), b.clone()));
+                }
+            }
+        }
+        edges
+    }
+
+    /// The top-level modules.
+    fn top_level(&self) -> BTreeSet<String> {
+        self.modules
+            .iter()
+            .filter(|m| m.len() == 1)
+            .map(|m| m[0].clone())
+            .collect()
+    }
+}
+
+/// The package name of a crate folder (`crates/render` → `candela-render`).
+fn package(dir: &Path) -> String {
+    let toml = fs::read_to_string(dir.join("Cargo.toml")).expect("Cargo.toml");
+    toml.lines()
+        .find_map(|l| l.strip_prefix("name = \""))
+        .and_then(|l| l.strip_suffix('"'))
+        .expect("a package name")
+        .to_string()
+}
+
+fn architecture_md() -> String {
+    fs::read_to_string(repo().join("ARCHITECTURE.md")).expect("ARCHITECTURE.md")
+}
+
+/// The layer diagrams of ARCHITECTURE.md: package → its lines of modules, top line first.
+fn layer_diagrams(md: &str) -> BTreeMap<String, Vec<Vec<String>>> {
+    let mut out = BTreeMap::new();
+    let mut current: Option<String> = None;
+    for line in md.lines() {
+        if let Some(name) = line.strip_suffix(" (top to bottom)") {
+            current = Some(name.trim().to_string());
+            out.insert(name.trim().to_string(), Vec::new());
+        } else if line.trim().is_empty() || line.starts_with("```") {
+            current = None;
+        } else if let Some(c) = &current {
+            let mods = line
+                .split('·')
+                .map(|m| m.trim().to_string())
+                .filter(|m| !m.is_empty())
+                .collect();
+            out.get_mut(c).expect("started").push(mods);
+        }
+    }
+    out
+}
+
+#[test]
+fn the_layer_diagrams_match_the_imports() {
+    let diagrams = layer_diagrams(&architecture_md());
+    let mut report = Vec::new();
+    for dir in workspace_crates() {
+        let c = load_crate(&dir);
+        let name = package(&dir);
+        let Some(lines) = diagrams.get(&name) else {
+            report.push(format!("ARCHITECTURE.md has no layer diagram for {name}"));
+            continue;
+        };
+        // Line index from the bottom: a module may use modules with a smaller index.
+        let mut level = BTreeMap::new();
+        for (i, mods) in lines.iter().rev().enumerate() {
+            for m in mods {
+                if level.insert(m.clone(), i).is_some() {
+                    report.push(format!("{name}: `{m}` is listed twice"));
+                }
+            }
+        }
+        for m in c.top_level() {
+            if !level.contains_key(&m) {
+                report.push(format!("{name}: module `{m}` is missing from the diagram"));
+            }
+        }
+        for m in level.keys() {
+            if !c.top_level().contains(m) {
+                report.push(format!(
+                    "{name}: the diagram lists `{m}`, which is not a module"
+                ));
+            }
+        }
+        for (a, b) in c.top_level_edges() {
+            if let (Some(la), Some(lb)) = (level.get(&a), level.get(&b)) {
+                if lb >= la {
+                    report.push(format!("{name}: `{a}` uses `{b}`, which is not below it"));
+                }
+            }
+        }
+    }
+    assert!(report.is_empty(), "{}", report.join("\n"));
+}
+
+/// The backticked words of each crate's code-map section (`### \`crates/NAME\``).
+fn code_map_words(md: &str) -> BTreeMap<String, BTreeSet<String>> {
+    let mut out: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    let mut current: Option<String> = None;
+    for line in md.lines() {
+        if let Some(rest) = line.strip_prefix("### `crates/") {
+            current = rest.split('`').next().map(str::to_string);
+            continue;
+        }
+        if line.starts_with("## ") {
+            current = None;
+        }
+        let Some(c) = &current else { continue };
+        let words = out.entry(c.clone()).or_default();
+        for (k, w) in line.split('`').enumerate() {
+            if k % 2 == 1 {
+                words.insert(w.to_string());
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_code_map_names_every_source_file() {
+    let map = code_map_words(&architecture_md());
+    let mut report = Vec::new();
+    for dir in workspace_crates() {
+        let folder = dir.file_name().unwrap().to_string_lossy().into_owned();
+        let src = dir.join("src");
+        let Some(words) = map.get(&folder) else {
+            report.push(format!(
+                "ARCHITECTURE.md has no code map for crates/{folder}"
+            ));
+            continue;
+        };
+        let mut names = BTreeSet::new();
+        for (path, _) in source_files(&src) {
+            let rel = path
+                .strip_prefix(&src)
+                .unwrap()
+                .to_string_lossy()
+                .into_owned();
+            let file = path.file_name().unwrap().to_string_lossy().into_owned();
+            names.insert(file.clone());
+            for folder in Path::new(&rel).parent().into_iter().flat_map(|p| p.iter()) {
+                let f = format!("{}/", folder.to_string_lossy());
+                if !words.iter().any(|w| w.ends_with(&f)) {
+                    report.push(format!(
+                        "crates/{}: the code map does not name `{f}`",
+                        src.display()
+                    ));
+                }
+                names.insert(f);
+            }
+            if ["mod.rs", "lib.rs", "main.rs"].contains(&file.as_str()) {
+                continue;
+            }
+            if !words.contains(&file) && !words.contains(&rel) {
+                report.push(format!(
+                    "crates/{folder}/src: the code map does not name `{rel}`"
+                ));
+            }
+        }
+        for w in words {
+            let w = w.trim_start_matches("src/");
+            if w.ends_with(".rs") && !w.contains('/') && !names.contains(w) {
+                report.push(format!(
+                    "crates/{folder}: the code map names `{w}`, which does not exist"
+                ));
+            }
+            if w.ends_with('/') && !w.contains(' ') && !w.starts_with("crates/") {
+                let last = format!("{}/", w.trim_end_matches('/').rsplit('/').next().unwrap());
+                if !names.contains(&last) {
+                    report.push(format!(
+                        "crates/{folder}: the code map names `{w}`, which is not a folder of src/"
+                    ));
+                }
+            }
+        }
+    }
+    report.dedup();
+    assert!(report.is_empty(), "{}", report.join("\n"));
+}
+
+#[test]
+fn the_render_core_does_no_io() {
+    let src = repo().join("crates/render/src");
+    let mut report = Vec::new();
+    for (path, _) in source_files(&src) {
+        let text = strip(&fs::read_to_string(&path).unwrap());
+        for bad in [
+            "std::fs",
+            "std::io",
+            "std::net",
+            "std::process",
+            "println!",
+            "eprintln!",
+            "File::",
+        ] {
+            if text.contains(bad) {
+                report.push(format!("{}: uses {bad}", path.display()));
+            }
+        }
+    }
+    assert!(report.is_empty(), "{}", report.join("\n"));
+}
+
+#[test]
+fn unsafe_code_lives_only_where_a_file_says_why() {
+    let mut report = Vec::new();
+    for dir in workspace_crates() {
+        for (path, _) in source_files(&dir.join("src")) {
+            let raw = fs::read_to_string(&path).unwrap();
+            let t = tokens(&strip(&raw));
+            if !t.iter().any(|w| w == "unsafe") {
+                continue;
+            }
+            let allowed = raw.contains("#![allow(unsafe_code)]");
+            let explained = raw.contains("Why unsafe code is allowed");
+            if !(allowed && explained) {
+                report.push(format!(
+                    "{}: unsafe code without `#![allow(unsafe_code)]` and a `Why unsafe code is allowed` comment",
+                    path.display()
+                ));
+            }
+        }
+    }
+    assert!(report.is_empty(), "{}", report.join("\n"));
 }
