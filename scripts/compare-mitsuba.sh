@@ -1,47 +1,35 @@
 #!/usr/bin/env bash
-# Compares candela with Mitsuba 3 on a Mitsuba XML scene in one run, as the bench README asks:
-# render time, RMSE against a reference image, and efficiency = 1 / (time × MSE), each as a
-# ratio candela / Mitsuba (> 1: candela is better).
-# Usage: bash scripts/compare-mitsuba.sh [SCENE.xml] [SPP=64] [REFERENCE.pfm] [SAMPLER=sobol]
-# Defaults: ../shared/bench/cornell.xml at 512×512 against its reference. Needs python3 (the
-# Mitsuba timing script installs Mitsuba from PyPI on first use).
+# candela against Mitsuba 3 on the bench scenes, in one run: the issue-13 table.
+#
+# For each scene of bench/scenes/ (or the NAMEs given), Mitsuba llvm_ad_rgb renders with each
+# of its samplers (independent, multijitter, ldsampler; render call only, warm JIT) and candela
+# renders as a whole process (its default sampler and independent), all at 512×512, 64 spp, in
+# the same run; each image's RMSE against bench/reference/NAME.pfm gives the efficiency
+# 1 / (time × MSE) relative to Mitsuba's best sampler (../shared/bench/efficiency.py).
+#
+# Usage: bash scripts/compare-mitsuba.sh [NAME ...] [-- EFFICIENCY.PY OPTIONS]
+#   e.g. bash scripts/compare-mitsuba.sh cornell -- --goal 1.5 --candela-samplers default
+# CANDELA_BIN=path skips the build and uses that binary. Meshes and references are made when
+# missing (bench/make-meshes.py, bench/references.sh: Mitsuba at 2048 spp, a few minutes each).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 bench=${CANDELA_BENCH:-$root/../shared/bench}
-scene=${1:-$bench/cornell.xml}; spp=${2:-64}; ref=${3:-$bench/cornell-reference.pfm}
-sampler=${4:-sobol}
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
-(cd "$root" && cargo build --release -q)
-bash "$bench/mitsuba-time.sh" "$scene" "$spp" 512 "$out/mitsuba" | tee "$out/mitsuba.txt"
-"$root/target/release/candela" render "$scene" --spp "$spp" --sampler "$sampler" --stats -q \
-  -o "$out/candela.pfm" 2>&1 | tee "$out/candela.txt"
-python3 - "$ref" "$out" <<'PY'
-import array, re, sys
-ref_path, out = sys.argv[1], sys.argv[2]
-def load(path):
-    data = open(path, "rb").read()
-    magic, size, scale, rest = data.split(b"\n", 3)
-    w, h = map(int, size.split())
-    a = array.array("f")
-    a.frombytes(rest[: w * h * 12])
-    if float(scale) > 0:
-        a.byteswap()
-    return a
-ref = load(ref_path)
-def mse(a):
-    # Emitter pixels are clamped so that their (huge) noise does not dominate.
-    return sum((min(x, 50.0) - min(y, 50.0)) ** 2 for x, y in zip(a, ref)) / len(ref)
-rows = {}
-for line in open(f"{out}/mitsuba.txt"):
-    m = re.match(r"mitsuba (\S+): .* in ([0-9.]+) s", line)
-    if m:
-        rows[f"mitsuba {m.group(1)}"] = (float(m.group(2)), mse(load(f"{out}/mitsuba-{m.group(1)}.pfm")))
-m = re.search(r"\): ([0-9.]+) s,", open(f"{out}/candela.txt").read())
-rows["candela"] = (float(m.group(1)), mse(load(f"{out}/candela.pfm")))
-ct, cm = rows["candela"]
-for name, (t, e) in rows.items():
-    print(f"{name:22s} {t:7.2f} s  RMSE {e ** 0.5:.5f}  efficiency {1 / (t * e):9.1f}"
-          + ("" if name == "candela" else
-             f"   candela/this: speed {t / ct:.2f}x, efficiency {(t * e) / (ct * cm):.2f}x"))
-PY
+venv=${CANDELA_BENCH_VENV:-$HOME/.cache/candela-bench/venv}
+names=(); extra=()
+while [ $# -gt 0 ]; do
+  if [ "$1" = "--" ]; then shift; extra=("$@"); break; fi
+  names+=("$1"); shift
+done
+[ ${#names[@]} -gt 0 ] || names=(cornell cornell-specular meshes-sky lights-plastic)
+if [ -z "${CANDELA_BIN:-}" ]; then
+  (cd "$root" && cargo build --release -q)
+  CANDELA_BIN=$root/target/release/candela
+fi
+bash "$root/bench/references.sh" "${names[@]}"
+scenes=()
+for n in "${names[@]}"; do scenes+=("$root/bench/scenes/$n.xml:$root/bench/reference/$n.pfm"); done
+export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
+echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(nproc) cores;" \
+  "AVX-512: $(grep -qw avx512f /proc/cpuinfo && echo yes || echo no)"
+"$venv/bin/python" "$bench/efficiency.py" "$CANDELA_BIN" --scenes "${scenes[@]}" --spp 64 --res 512 \
+  "${extra[@]}"
