@@ -152,11 +152,14 @@ impl Integrator for Path {
             depth += 1;
 
             // Russian roulette from `rr_depth` on: the path survives with probability
-            // q = min(max(β) / Πη², 0.95), where Πη² is the product of the squared relative
+            // q = min(max(β)·Πη², 0.95), where Πη² is the product of the squared relative
             // indices of the refractions taken so far (`eta_scale`), and survivors are divided
-            // by q.
+            // by q. Refraction into a denser medium scales radiance (and so β) by 1/η²;
+            // multiplying it back out keeps paths inside glass from being terminated for
+            // that compression alone, which would make their survivors fireflies (as pbrt-v4
+            // and Mitsuba 3 do).
             if depth >= self.rr_depth {
-                let q = (beta.max_component() / eta_scale).min(0.95);
+                let q = (beta.max_component() * eta_scale).min(0.95);
                 if !(sampler.next_1d() < q) {
                     break;
                 }
