@@ -150,6 +150,49 @@ fn lossless_materials_vanish_in_a_white_furnace() {
     }
 }
 
+/// Russian roulette inside glass: clear glass in a white furnace, roulette from the first
+/// bounce. Radiance entering the glass is compressed by 1/η² and expanded again on the way out,
+/// so the roulette must look at β·Πη² (≈ 1 all along a lossless path: survival 0.95), not at β
+/// alone (≈ 0.44 inside) nor β/Πη² (≈ 0.2, whose survivors count five times: fireflies). Every
+/// pixel is 1 in expectation; at 64 spp the pixels must also stay close to it (the image is
+/// deterministic: same seed, same pixels).
+#[test]
+fn roulette_inside_glass_keeps_the_variance_low() {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::two_sided(Model::Dielectric {
+        eta: 1.5,
+        reflectance: Texture::Uniform(Rgb::WHITE),
+        transmittance: Texture::Uniform(Rgb::WHITE),
+        mf: None,
+    }));
+    b.add_shape(
+        Shape::Sphere(Sphere::new(
+            Transform::translation(Vec3::new(4.0, 0.0, 0.0))
+                * Transform::scaling(Vec3::new(1.3, 1.3, 1.3)),
+        )),
+        m,
+        None,
+    );
+    b.add_light(Light::Environment(Environment::new(
+        Texture::Uniform(Rgb::WHITE),
+        Transform::IDENTITY,
+    )));
+    b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
+    let scene = b.build(AccelKind::Bvh);
+    let path = Path {
+        max_depth: Some(64),
+        rr_depth: 1,
+        hide_emitters: false,
+    };
+    let img = image(&scene, &path, 64);
+    let n = img.pixels().len() as f32;
+    let mean = img.pixels().iter().map(|p| p.r).sum::<f32>() / n;
+    let rms = (img.pixels().iter().map(|p| (p.r - 1.0).powi(2)).sum::<f32>() / n).sqrt();
+    assert!((mean - 1.0).abs() < 0.03, "mean {mean}");
+    // 0.008 with survival min(β·Πη², 0.95); the old rule, min(β/Πη², 0.95), gave 0.05.
+    assert!(rms < 0.02, "pixels scatter around 1 by {rms}");
+}
+
 /// Phong, Blinn–Phong and Cook–Torrance under the path tracer conserve energy: with
 /// k_d + k_s ≤ 1 an object in a white furnace is never brighter than the furnace.
 #[test]
