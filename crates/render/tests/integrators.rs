@@ -187,7 +187,13 @@ fn roulette_inside_glass_keeps_the_variance_low() {
     let img = image(&scene, &path, 64);
     let n = img.pixels().len() as f32;
     let mean = img.pixels().iter().map(|p| p.r).sum::<f32>() / n;
-    let rms = (img.pixels().iter().map(|p| (p.r - 1.0).powi(2)).sum::<f32>() / n).sqrt();
+    let rms = (img
+        .pixels()
+        .iter()
+        .map(|p| (p.r - 1.0).powi(2))
+        .sum::<f32>()
+        / n)
+        .sqrt();
     assert!((mean - 1.0).abs() < 0.03, "mean {mean}");
     // 0.008 with survival min(β·Πη², 0.95); the old rule, min(β/Πη², 0.95), gave 0.05.
     assert!(rms < 0.02, "pixels scatter around 1 by {rms}");

@@ -20,6 +20,7 @@
 //! with SIMD (the `simd` module, AVX2 chosen at run time). With the cargo feature `embree`, Intel
 //! Embree 3 is available too (`AccelKind::Embree`) for comparisons; it is not bit-identical.
 
+mod blocks;
 mod bvh;
 #[cfg(feature = "embree")]
 mod embree;

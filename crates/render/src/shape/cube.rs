@@ -82,6 +82,11 @@ impl Cube {
         }
     }
 
+    /// True when the placement and its inverse are affine (last row 0, 0, 0, 1).
+    pub fn is_affine(&self) -> bool {
+        self.affine
+    }
+
     /// Where the ray's line enters and leaves the cube (parameters and faces), or `None`.
     /// Face ids are `2·axis + (1 if the + side)`.
     #[inline]

@@ -69,6 +69,17 @@ impl Parallelogram {
         })
     }
 
+    /// What a block test needs: the corner, v × w and the dual vectors, as arrays.
+    pub(crate) fn lane_data(&self) -> ([f32; 3], [f32; 3], [f32; 3], [f32; 3]) {
+        let a = |v: Vec3| [v.x, v.y, v.z];
+        (
+            [self.p.x, self.p.y, self.p.z],
+            a(self.n),
+            a(self.ds),
+            a(self.dt),
+        )
+    }
+
     /// The surface at (s, t).
     #[inline]
     pub fn geometry(&self, s: f32, t: f32) -> LocalGeometry {

@@ -45,6 +45,12 @@ impl Sphere {
         Some(if t0 <= t1 { (t0, t1) } else { (t1, t0) })
     }
 
+    /// True when the inverse placement is affine (last row 0, 0, 0, 1): points then leave
+    /// the world frame without the homogeneous division changing them.
+    pub fn has_affine_inverse(&self) -> bool {
+        self.world_from_object.inv.m[3] == [0.0, 0.0, 0.0, 1.0]
+    }
+
     /// The closest crossing inside the ray's interval.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<ShapeHit> {

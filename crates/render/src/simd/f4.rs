@@ -100,6 +100,78 @@ mod sse {
         pub(crate) fn ne(self, o: F4) -> u32 {
             unsafe { _mm_movemask_ps(_mm_cmpneq_ps(self.0, o.0)) as u32 }
         }
+
+        /// Per lane square root (correctly rounded, as `f32::sqrt`).
+        #[inline(always)]
+        pub(crate) fn sqrt(self) -> F4 {
+            F4(unsafe { _mm_sqrt_ps(self.0) })
+        }
+
+        /// Lanes of `a` where `mask` (a comparison result) is set, of `b` elsewhere.
+        #[inline(always)]
+        pub(crate) fn select(mask: F4, a: F4, b: F4) -> F4 {
+            F4(unsafe { _mm_or_ps(_mm_and_ps(mask.0, a.0), _mm_andnot_ps(mask.0, b.0)) })
+        }
+
+        /// All bits set where `self[i] > o[i]`.
+        #[inline(always)]
+        pub(crate) fn gt_mask(self, o: F4) -> F4 {
+            F4(unsafe { _mm_cmpgt_ps(self.0, o.0) })
+        }
+
+        /// All bits set where `self[i] < o[i]`.
+        #[inline(always)]
+        pub(crate) fn lt_mask(self, o: F4) -> F4 {
+            F4(unsafe { _mm_cmplt_ps(self.0, o.0) })
+        }
+
+        /// `self` with the sign bit of `o` (as `f32::copysign`).
+        #[inline(always)]
+        pub(crate) fn copysign(self, o: F4) -> F4 {
+            unsafe {
+                let sign = _mm_set1_ps(-0.0);
+                F4(_mm_or_ps(
+                    _mm_andnot_ps(sign, self.0),
+                    _mm_and_ps(sign, o.0),
+                ))
+            }
+        }
+
+        /// Bit i set where `self[i] >= o[i]`.
+        #[inline(always)]
+        pub(crate) fn ge(self, o: F4) -> u32 {
+            unsafe { _mm_movemask_ps(_mm_cmpge_ps(self.0, o.0)) as u32 }
+        }
+
+        /// `-self` (the sign bit flipped, as `f32`'s negation).
+        #[inline(always)]
+        pub(crate) fn neg(self) -> F4 {
+            F4(unsafe { _mm_xor_ps(self.0, _mm_set1_ps(-0.0)) })
+        }
+
+        /// All bits set where `self[i] <= o[i]`.
+        #[inline(always)]
+        pub(crate) fn le_mask(self, o: F4) -> F4 {
+            F4(unsafe { _mm_cmple_ps(self.0, o.0) })
+        }
+
+        /// All bits set where `self[i] == o[i]`.
+        #[inline(always)]
+        pub(crate) fn eq_mask(self, o: F4) -> F4 {
+            F4(unsafe { _mm_cmpeq_ps(self.0, o.0) })
+        }
+
+        /// The bits of `self` not set in `o` (for masks).
+        #[inline(always)]
+        pub(crate) fn and_not(self, o: F4) -> F4 {
+            F4(unsafe { _mm_andnot_ps(o.0, self.0) })
+        }
+
+        /// Bit i set where lane i of a mask is set.
+        #[inline(always)]
+        pub(crate) fn bits(self) -> u32 {
+            unsafe { _mm_movemask_ps(self.0) as u32 }
+        }
     }
 }
 
@@ -116,7 +188,7 @@ mod portable {
         }
 
         #[inline(always)]
-        fn bits(self, o: F4, f: impl Fn(f32, f32) -> bool) -> u32 {
+        fn cmp_bits(self, o: F4, f: impl Fn(f32, f32) -> bool) -> u32 {
             (0..4).fold(0, |m, i| m | (f(self.0[i], o.0[i]) as u32) << i)
         }
 
@@ -148,19 +220,58 @@ mod portable {
             self.map(o, |a, b| if a < b { a } else { b })
         }
         pub(crate) fn le(self, o: F4) -> u32 {
-            self.bits(o, |a, b| a <= b)
+            self.cmp_bits(o, |a, b| a <= b)
         }
         pub(crate) fn lt(self, o: F4) -> u32 {
-            self.bits(o, |a, b| a < b)
+            self.cmp_bits(o, |a, b| a < b)
         }
         pub(crate) fn gt(self, o: F4) -> u32 {
-            self.bits(o, |a, b| a > b)
+            self.cmp_bits(o, |a, b| a > b)
         }
         pub(crate) fn eq(self, o: F4) -> u32 {
-            self.bits(o, |a, b| a == b)
+            self.cmp_bits(o, |a, b| a == b)
         }
         pub(crate) fn ne(self, o: F4) -> u32 {
-            self.bits(o, |a, b| a != b)
+            self.cmp_bits(o, |a, b| a != b)
+        }
+        pub(crate) fn sqrt(self) -> F4 {
+            F4(self.0.map(f32::sqrt))
+        }
+        pub(crate) fn select(mask: F4, a: F4, b: F4) -> F4 {
+            F4(std::array::from_fn(|i| {
+                if mask.0[i].to_bits() != 0 {
+                    a.0[i]
+                } else {
+                    b.0[i]
+                }
+            }))
+        }
+        pub(crate) fn gt_mask(self, o: F4) -> F4 {
+            self.map(o, |a, b| f32::from_bits(if a > b { u32::MAX } else { 0 }))
+        }
+        pub(crate) fn lt_mask(self, o: F4) -> F4 {
+            self.map(o, |a, b| f32::from_bits(if a < b { u32::MAX } else { 0 }))
+        }
+        pub(crate) fn copysign(self, o: F4) -> F4 {
+            self.map(o, f32::copysign)
+        }
+        pub(crate) fn ge(self, o: F4) -> u32 {
+            self.cmp_bits(o, |a, b| a >= b)
+        }
+        pub(crate) fn neg(self) -> F4 {
+            F4(self.0.map(|x| -x))
+        }
+        pub(crate) fn le_mask(self, o: F4) -> F4 {
+            self.map(o, |a, b| f32::from_bits(if a <= b { u32::MAX } else { 0 }))
+        }
+        pub(crate) fn eq_mask(self, o: F4) -> F4 {
+            self.map(o, |a, b| f32::from_bits(if a == b { u32::MAX } else { 0 }))
+        }
+        pub(crate) fn and_not(self, o: F4) -> F4 {
+            self.map(o, |a, b| f32::from_bits(a.to_bits() & !b.to_bits()))
+        }
+        pub(crate) fn bits(self) -> u32 {
+            (0..4).fold(0, |m, i| m | (self.0[i].to_bits() >> 31) << i)
         }
     }
 }

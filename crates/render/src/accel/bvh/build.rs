@@ -3,10 +3,10 @@
 
 use rayon::prelude::*;
 
-use super::layout::{BvhNode, Ref, COUNT_MASK, MEDIAN_DEPTH, OBJ_LEAF, TRI_LEAF, W};
+use super::layout::{BvhNode, Kind, Ref, COUNT_MASK, KINDS, KIND_SHIFT, MEDIAN_DEPTH, W};
 use super::Bvh;
 use crate::accel::BuildPrim;
-use crate::geometry::{Geometry, PrimRef as GeomPrim};
+use crate::geometry::Geometry;
 
 /// Subtrees larger than this are built on separate threads.
 pub(super) const PARALLEL_THRESHOLD: usize = 8192;
@@ -14,9 +14,9 @@ pub(super) const PARALLEL_THRESHOLD: usize = 8192;
 const PARALLEL_BINNING: usize = 65536;
 /// Number of centroid bins per axis.
 const BINS: usize = 16;
-/// Largest triangle leaf (four blocks).
+/// Largest leaf of primitives tested in blocks (four blocks).
 const MAX_TRI_LEAF: usize = 16;
-/// Largest leaf of other primitives.
+/// Largest leaf of other primitives (tested one by one).
 const MAX_OBJ_LEAF: usize = 4;
 /// Cost of a node visit relative to testing one block of triangles.
 const TRAVERSAL_COST: f32 = 0.5;
@@ -60,10 +60,12 @@ impl Bvh {
         let mut bvh = Self {
             nodes,
             root,
-            tris: Vec::new(),
             ids,
+            ..Self::default()
         };
         bvh.pack_triangles(geometry);
+        bvh.pack_objects(geometry);
+        bvh.flat = bvh.flat_root();
         bvh
     }
 }
@@ -79,11 +81,11 @@ struct PrimRef {
 
 impl PrimRef {
     fn new(p: &BuildPrim, geometry: &Geometry) -> Self {
-        let tri = matches!(geometry.prim(p.id), GeomPrim::Triangle { .. });
+        let kind = Kind::of(geometry, p.id);
         let (l, h) = (p.bounds.min, p.bounds.max);
         Self {
             lo: [l.x, l.y, l.z, f32::from_bits(p.id)],
-            hi: [h.x, h.y, h.z, f32::from_bits(tri as u32)],
+            hi: [h.x, h.y, h.z, f32::from_bits(kind as u32)],
         }
     }
 
@@ -93,8 +95,8 @@ impl PrimRef {
     }
 
     #[inline(always)]
-    fn is_tri(&self) -> bool {
-        self.hi[3].to_bits() != 0
+    fn kind(&self) -> Kind {
+        Kind::from_bits(self.hi[3].to_bits())
     }
 
     /// Twice the centroid.
@@ -171,7 +173,8 @@ struct Info {
     b: Aabb,
     c: Aabb,
     n: usize,
-    tris: usize,
+    /// Primitives of each [`Kind`].
+    kinds: [u32; KINDS],
 }
 
 impl Info {
@@ -179,7 +182,7 @@ impl Info {
         b: Aabb::EMPTY,
         c: Aabb::EMPTY,
         n: 0,
-        tris: 0,
+        kinds: [0; KINDS],
     };
 
     #[inline(always)]
@@ -187,14 +190,16 @@ impl Info {
         self.b.grow(&p.lo, &p.hi);
         self.c.grow_point(&p.centroid2());
         self.n += 1;
-        self.tris += p.is_tri() as usize;
+        self.kinds[p.kind() as usize] += 1;
     }
 
     fn merge(mut self, o: &Info) -> Info {
         self.b = self.b.union(&o.b);
         self.c = self.c.union(&o.c);
         self.n += o.n;
-        self.tris += o.tris;
+        for k in 0..KINDS {
+            self.kinds[k] += o.kinds[k];
+        }
         self
     }
 
@@ -213,16 +218,23 @@ impl Info {
         }
     }
 
-    fn pure_triangles(&self) -> bool {
-        self.tris == self.n
+    /// The one kind of the range (the first present when mixed).
+    fn kind(&self) -> Kind {
+        let k = self.kinds.iter().position(|&c| c != 0).unwrap_or(0);
+        Kind::from_bits(k as u32)
+    }
+
+    /// All primitives of the range go into blocks of four.
+    fn blocked(&self) -> bool {
+        !self.mixed() && self.kind().blocked()
     }
 
     fn mixed(&self) -> bool {
-        self.tris != 0 && self.tris != self.n
+        self.kinds.iter().filter(|&&c| c != 0).count() > 1
     }
 
     fn max_leaf(&self) -> usize {
-        if self.pure_triangles() {
+        if self.blocked() {
             MAX_TRI_LEAF
         } else {
             MAX_OBJ_LEAF
@@ -230,11 +242,11 @@ impl Info {
     }
 }
 
-/// The cost of intersecting `n` primitives of a range: blocks of four for triangles,
-/// [`OBJ_COST`] for each other primitive.
+/// The cost of intersecting `n` primitives of a range: blocks of four for the kinds tested in
+/// blocks, [`OBJ_COST`] for each other primitive.
 #[inline(always)]
-fn prim_cost(n: usize, triangles: bool) -> f32 {
-    if triangles {
+fn prim_cost(n: usize, blocked: bool) -> f32 {
+    if blocked {
         n.div_ceil(4) as f32
     } else {
         n as f32 * OBJ_COST
@@ -332,8 +344,9 @@ fn split(prims: &mut [PrimRef], info: &Info, depth: u32) -> Option<Split> {
     }
     let small = n <= info.max_leaf();
     if info.mixed() && n <= MAX_TRI_LEAF {
-        // Leaves are never mixed: triangles first.
-        return Some(partition(prims, |p| p.is_tri()));
+        // Leaves are never mixed: one kind first.
+        let first = info.kind();
+        return Some(partition(prims, |p| p.kind() == first));
     }
     if depth >= MEDIAN_DEPTH {
         return (!small || info.mixed()).then(|| median_split(prims, info));
@@ -343,7 +356,7 @@ fn split(prims: &mut [PrimRef], info: &Info, depth: u32) -> Option<Split> {
         // All centroids coincide.
         return (!small || info.mixed()).then(|| median_split(prims, info));
     }
-    let tri = info.pure_triangles();
+    let tri = info.blocked();
     let bins = binner.fill(prims);
     // Best over axes of the unnormalised SAH cost: A_L·C(L) + A_R·C(R).
     let mut best = (f32::INFINITY, 0usize, 0usize);
@@ -439,11 +452,7 @@ fn leaf(offset: usize, info: &Info) -> Ref {
     debug_assert!(!info.mixed() && info.n <= COUNT_MASK as usize);
     Ref {
         child: offset as u32,
-        meta: if info.pure_triangles() {
-            TRI_LEAF
-        } else {
-            OBJ_LEAF
-        } | info.n as u32,
+        meta: (info.kind() as u32 + 1) << KIND_SHIFT | info.n as u32,
     }
 }
 

@@ -5,7 +5,9 @@
 use rayon::prelude::*;
 
 use super::Bvh;
+use crate::accel::blocks::{Box4, Quad4, Sphere4};
 use crate::geometry::{Geometry, PrimRef as GeomPrim};
+use crate::shape::Shape;
 
 /// Children per node.
 pub(super) const W: usize = 8;
@@ -15,14 +17,67 @@ pub(super) const MEDIAN_DEPTH: u32 = 16;
 /// Traversal stack: at most `W - 1` entries per level.
 pub(super) const STACK: usize = (W - 1) * (MEDIAN_DEPTH as usize + 12);
 
-/// A reference's kind bits: 0 for an inner node.
-pub(super) const KIND_SHIFT: u32 = 30;
+/// A reference's kind bits: 0 for an inner node, else the leaf's [`Kind`] + 1.
+pub(super) const KIND_SHIFT: u32 = 28;
 /// A leaf of triangles (in blocks of four).
-pub(super) const TRI_LEAF: u32 = 1 << KIND_SHIFT;
-/// A leaf of other primitives (a range of primitive ids).
-pub(super) const OBJ_LEAF: u32 = 2 << KIND_SHIFT;
+pub(super) const TRI_LEAF: u32 = (Kind::Tri as u32 + 1) << KIND_SHIFT;
+/// A leaf of other primitives (a range of primitive ids, tested one by one).
+pub(super) const OBJ_LEAF: u32 = (Kind::Other as u32 + 1) << KIND_SHIFT;
+/// A leaf of parallelograms (in blocks of four).
+pub(super) const QUAD_LEAF: u32 = (Kind::Quad as u32 + 1) << KIND_SHIFT;
+/// A leaf of spheres (in blocks of four).
+pub(super) const SPHERE_LEAF: u32 = (Kind::Sphere as u32 + 1) << KIND_SHIFT;
+/// A leaf of boxes (in blocks of four).
+pub(super) const BOX_LEAF: u32 = (Kind::Box as u32 + 1) << KIND_SHIFT;
 /// The primitive count of a leaf reference.
 pub(super) const COUNT_MASK: u32 = (1 << KIND_SHIFT) - 1;
+
+/// What a leaf holds: primitives of one kind. Triangles, parallelograms, spheres and boxes
+/// (those whose placement is affine) are packed into blocks of four tested at once; the
+/// others are tested one by one through [`Geometry::intersect_prim`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+pub(super) enum Kind {
+    Other = 0,
+    Tri = 1,
+    Quad = 2,
+    Sphere = 3,
+    Box = 4,
+}
+
+/// Number of [`Kind`]s.
+pub(super) const KINDS: usize = 5;
+
+impl Kind {
+    /// The kind of primitive `id`.
+    pub(super) fn of(geometry: &Geometry, id: u32) -> Kind {
+        match geometry.prim(id) {
+            GeomPrim::Triangle { .. } => Kind::Tri,
+            GeomPrim::Object(o) => match &geometry.objects()[o as usize].shape {
+                Shape::Parallelogram(_) => Kind::Quad,
+                Shape::Sphere(s) if s.has_affine_inverse() => Kind::Sphere,
+                Shape::Cube(c) if c.is_affine() => Kind::Box,
+                _ => Kind::Other,
+            },
+        }
+    }
+
+    /// The kind numbered `b` (as stored in build records).
+    pub(super) fn from_bits(b: u32) -> Kind {
+        match b {
+            1 => Kind::Tri,
+            2 => Kind::Quad,
+            3 => Kind::Sphere,
+            4 => Kind::Box,
+            _ => Kind::Other,
+        }
+    }
+
+    /// Leaves of this kind go into blocks of four.
+    pub(super) fn blocked(self) -> bool {
+        self != Kind::Other
+    }
+}
 
 /// A node of `W` children.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -142,5 +197,80 @@ impl Bvh {
         } else {
             src.iter().map(fill).collect()
         };
+    }
+
+    /// Replaces the ranges of primitive ids of parallelogram, sphere and box leaves by blocks
+    /// of four of their kind, in node order (unused lanes repeat the leaf's first primitive and
+    /// have the id `u32::MAX`).
+    pub(super) fn pack_objects(&mut self, geometry: &Geometry) {
+        let objects = geometry.objects();
+        let object = |id: u32| match geometry.prim(id) {
+            GeomPrim::Object(o) => &objects[o as usize].shape,
+            GeomPrim::Triangle { .. } => unreachable!("an object leaf holds no triangles"),
+        };
+        let mut refs: Vec<(usize, usize)> = vec![(usize::MAX, 0)];
+        refs.extend((0..self.nodes.len()).flat_map(|n| (0..W).map(move |c| (n, c))));
+        for (n, c) in refs {
+            let r = if n == usize::MAX {
+                self.root
+            } else {
+                Ref {
+                    child: self.nodes[n].child[c],
+                    meta: self.nodes[n].meta[c],
+                }
+            };
+            let kind = r.meta & !COUNT_MASK;
+            if r.meta == 0 || !(kind == QUAD_LEAF || kind == SPHERE_LEAF || kind == BOX_LEAF) {
+                continue;
+            }
+            let count = (r.meta & COUNT_MASK) as usize;
+            let first = r.child as usize;
+            let start = match kind {
+                QUAD_LEAF => self.quads.len(),
+                SPHERE_LEAF => self.spheres.len(),
+                _ => self.boxes.len(),
+            };
+            for chunk in self.ids[first..first + count].chunks(4) {
+                let mut lane_ids = [u32::MAX; 4];
+                lane_ids[..chunk.len()].copy_from_slice(chunk);
+                match kind {
+                    QUAD_LEAF => {
+                        let qs: Vec<_> = chunk
+                            .iter()
+                            .map(|&id| match object(id) {
+                                Shape::Parallelogram(p) => p,
+                                _ => unreachable!("a parallelogram leaf"),
+                            })
+                            .collect();
+                        self.quads.push((Quad4::new(&qs), lane_ids));
+                    }
+                    SPHERE_LEAF => {
+                        let ss: Vec<_> = chunk
+                            .iter()
+                            .map(|&id| match object(id) {
+                                Shape::Sphere(s) => s,
+                                _ => unreachable!("a sphere leaf"),
+                            })
+                            .collect();
+                        self.spheres.push((Sphere4::new(&ss), lane_ids));
+                    }
+                    _ => {
+                        let cs: Vec<_> = chunk
+                            .iter()
+                            .map(|&id| match object(id) {
+                                Shape::Cube(c) => c,
+                                _ => unreachable!("a box leaf"),
+                            })
+                            .collect();
+                        self.boxes.push((Box4::new(&cs), lane_ids));
+                    }
+                }
+            }
+            if n == usize::MAX {
+                self.root.child = start as u32;
+            } else {
+                self.nodes[n].child[c] = start as u32;
+            }
+        }
     }
 }

@@ -42,6 +42,7 @@ mod traverse;
 
 pub use layout::{BvhNode, Tri4};
 
+use super::blocks::{Box4, Quad4, Sphere4};
 use layout::Ref;
 
 /// An 8-wide BVH over the bounded primitives of a geometry.
@@ -50,6 +51,13 @@ pub struct Bvh {
     nodes: Vec<BvhNode>,
     root: Ref,
     tris: Vec<Tri4>,
+    /// Blocks of four parallelograms, spheres and boxes, with their lanes' primitive ids.
+    quads: Vec<(Quad4, [u32; 4])>,
+    spheres: Vec<(Sphere4, [u32; 4])>,
+    boxes: Vec<(Box4, [u32; 4])>,
+    /// When every child of the root is a leaf (small scenes): those leaves, tested one after
+    /// the other without box tests or a stack.
+    flat: Vec<Ref>,
     /// Primitive ids in leaf order (other leaves index it).
     ids: Vec<u32>,
 }
@@ -60,6 +68,10 @@ impl Default for Bvh {
             nodes: Vec::new(),
             root: Ref::EMPTY,
             tris: Vec::new(),
+            quads: Vec::new(),
+            spheres: Vec::new(),
+            boxes: Vec::new(),
+            flat: Vec::new(),
             ids: Vec::new(),
         }
     }
@@ -71,15 +83,18 @@ impl Bvh {
         self.nodes.len()
     }
 
-    /// Number of triangle blocks.
+    /// Number of blocks of four primitives (triangles, parallelograms, spheres, boxes).
     pub fn block_count(&self) -> usize {
-        self.tris.len()
+        self.tris.len() + self.quads.len() + self.spheres.len() + self.boxes.len()
     }
 
     /// Memory used by nodes, triangle blocks and the primitive order, in bytes.
     pub fn memory(&self) -> usize {
         self.nodes.len() * std::mem::size_of::<BvhNode>()
             + self.tris.len() * std::mem::size_of::<Tri4>()
+            + self.quads.len() * std::mem::size_of::<(Quad4, [u32; 4])>()
+            + self.spheres.len() * std::mem::size_of::<(Sphere4, [u32; 4])>()
+            + self.boxes.len() * std::mem::size_of::<(Box4, [u32; 4])>()
             + self.ids.len() * 4
     }
 }

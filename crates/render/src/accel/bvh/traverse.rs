@@ -1,8 +1,11 @@
 //! BVH traversal: the eight child boxes of a node tested at once, nearest child first for
 //! closest hits, any order for shadow rays; leaves of triangles tested four at a time.
 
-use super::layout::{BvhNode, Ref, Tri4, COUNT_MASK, STACK, TRI_LEAF, W};
+use super::layout::{
+    BvhNode, Ref, Tri4, BOX_LEAF, COUNT_MASK, OBJ_LEAF, QUAD_LEAF, SPHERE_LEAF, STACK, TRI_LEAF, W,
+};
 use super::Bvh;
+use crate::accel::blocks::{BlockHit, BlockRay};
 use crate::accel::closest;
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
@@ -21,6 +24,7 @@ impl Bvh {
             geometry,
             ray: *ray,
             tri: TriRay::new(ray, !self.tris.is_empty()),
+            block: BlockRay::new(ray),
             best: None,
             tests: 0,
         };
@@ -36,12 +40,54 @@ impl Bvh {
             geometry,
             ray,
             tri: TriRay::new(ray, !self.tris.is_empty()),
+            block: BlockRay::new(ray),
             tests: 0,
         };
         let visited = self.traverse(ray, &mut q);
         stats.nodes += visited & !FOUND;
         stats.prim_tests += q.tests;
         visited & FOUND != 0
+    }
+
+    /// Tests block `b` of the analytic kind in `meta` against the ray; returns the hits and
+    /// the lanes' primitive ids.
+    #[inline(always)]
+    fn block_test(&self, meta: u32, b: usize, br: &BlockRay, ray: &Ray) -> (BlockHit, [u32; 4]) {
+        match meta & !COUNT_MASK {
+            QUAD_LEAF => {
+                let (q, ids) = &self.quads[b];
+                (q.test(br, ray.tmin, ray.tmax), *ids)
+            }
+            SPHERE_LEAF => {
+                let (q, ids) = &self.spheres[b];
+                (q.test(br, ray.tmin, ray.tmax), *ids)
+            }
+            _ => {
+                debug_assert_eq!(meta & !COUNT_MASK, BOX_LEAF);
+                let (q, ids) = &self.boxes[b];
+                (q.test(br, ray.tmin, ray.tmax), *ids)
+            }
+        }
+    }
+
+    /// The root's children when all of them are leaves (a small scene), else nothing.
+    pub(super) fn flat_root(&self) -> Vec<Ref> {
+        if self.root.meta != 0 {
+            return Vec::new();
+        }
+        let root = &self.nodes[self.root.child as usize];
+        let kids: Vec<Ref> = (0..W)
+            .map(|i| Ref {
+                child: root.child[i],
+                meta: root.meta[i],
+            })
+            .filter(|r| r.meta == 0 || r.meta & COUNT_MASK != 0)
+            .collect();
+        if kids.iter().all(|r| r.meta != 0) {
+            kids
+        } else {
+            Vec::new()
+        }
     }
 
     /// Starts loading what `r` refers to (it will be visited later, unless culled).
@@ -67,6 +113,15 @@ impl Bvh {
         let cur = self.root;
         if cur.meta != 0 {
             return if q.leaf(self, cur) { FOUND } else { 0 };
+        }
+        if !self.flat.is_empty() {
+            // A small scene: every leaf, without box tests.
+            for &r in &self.flat {
+                if q.leaf(self, r) {
+                    return FOUND;
+                }
+            }
+            return 0;
         }
         STACK_SPACE.with(|space| match space.try_borrow_mut() {
             Ok(mut stack) => crate::simd::run(Traversal {
@@ -238,6 +293,7 @@ struct ClosestQuery<'a> {
     /// The ray, its `tmax` one ULP above the best hit.
     ray: Ray,
     tri: TriRay,
+    block: BlockRay,
     best: Option<Hit>,
     tests: u64,
 }
@@ -277,12 +333,36 @@ impl Query for ClosestQuery<'_> {
                     }
                 }
             }
-        } else {
+        } else if r.meta & !COUNT_MASK == OBJ_LEAF {
             let sr = &self.tri.sr;
             for &id in &bvh.ids[first..first + n as usize] {
                 if let Some(h) = self.geometry.intersect_prim(id, &self.ray, sr) {
                     if closest(&mut self.best, h) {
                         self.ray.tmax = h.t.next_up();
+                    }
+                }
+            }
+        } else {
+            for k in 0..n.div_ceil(4) as usize {
+                let (h, ids) = bvh.block_test(r.meta, first + k, &self.block, &self.ray);
+                let mut mask = h.mask & lanes(n, k);
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let (t_hit, id) = (h.t[i], ids[i]);
+                    let better = match &self.best {
+                        None => true,
+                        Some(b) => t_hit < b.t || (t_hit == b.t && id < b.prim),
+                    };
+                    if better {
+                        self.best = Some(Hit {
+                            t: t_hit,
+                            prim: id,
+                            uv: [h.uv[0][i], h.uv[1][i]],
+                            sub: h.face[i],
+                            leaf: 0,
+                        });
+                        self.ray.tmax = t_hit.next_up();
                     }
                 }
             }
@@ -311,6 +391,7 @@ struct AnyQuery<'a> {
     geometry: &'a Geometry,
     ray: &'a Ray,
     tri: TriRay,
+    block: BlockRay,
     tests: u64,
 }
 
@@ -332,6 +413,15 @@ impl Query for AnyQuery<'_> {
                     .mask
                     != 0
                 {
+                    self.tests += (n as u64).min(4 * k as u64 + 4);
+                    return true;
+                }
+            }
+            self.tests += n as u64;
+        } else if r.meta & !COUNT_MASK != OBJ_LEAF {
+            for k in 0..n.div_ceil(4) as usize {
+                let (h, _) = bvh.block_test(r.meta, first + k, &self.block, self.ray);
+                if h.mask & lanes(n, k) != 0 {
                     self.tests += (n as u64).min(4 * k as u64 + 4);
                     return true;
                 }
