@@ -9,6 +9,7 @@
 use crate::color::Rgb;
 use crate::image::Image;
 use crate::integrator::Integrator;
+use crate::math::{Point3, Ray, Vec3, BATCH};
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::stats::RayStats;
@@ -122,22 +123,40 @@ fn render_pixel(
         settings.spp,
     );
     let mut sum = [0f64; 3];
-    for i in 0..settings.spp {
-        let [sx, sy] = sampler.pixel_sample(i);
-        let u = (x as f32 + sx) / w;
-        let v = 1.0 - (y as f32 + sy) / h;
-        let ray = match scene.camera.lens {
-            None => scene.camera.ray(u, v),
-            Some(_) => scene.camera.ray_through_lens(u, v, sampler.next_2d()),
-        };
-        let l = integrator.radiance(scene, &ray, sampler, stats);
-        stats.samples += 1;
-        if l.is_finite() {
-            sum[0] += l.r as f64;
-            sum[1] += l.g as f64;
-            sum[2] += l.b as f64;
-        } else {
-            stats.rejected_samples += 1;
+    // The samples go to the integrator in groups of `BATCH`, traced side by side; each keeps
+    // its own place in the pixel's sample sequence.
+    let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
+    let mut cursors = [sampler.cursor(); BATCH];
+    let mut radiance = [Rgb::BLACK; BATCH];
+    for first in (0..settings.spp).step_by(BATCH) {
+        let n = (settings.spp - first).min(BATCH as u32) as usize;
+        for k in 0..n {
+            let [sx, sy] = sampler.pixel_sample(first + k as u32);
+            let u = (x as f32 + sx) / w;
+            let v = 1.0 - (y as f32 + sy) / h;
+            rays[k] = match scene.camera.lens {
+                None => scene.camera.ray(u, v),
+                Some(_) => scene.camera.ray_through_lens(u, v, sampler.next_2d()),
+            };
+            cursors[k] = sampler.cursor();
+        }
+        integrator.radiance_batch(
+            scene,
+            &rays[..n],
+            &mut cursors[..n],
+            sampler,
+            stats,
+            &mut radiance[..n],
+        );
+        for l in &radiance[..n] {
+            stats.samples += 1;
+            if l.is_finite() {
+                sum[0] += l.r as f64;
+                sum[1] += l.g as f64;
+                sum[2] += l.b as f64;
+            } else {
+                stats.rejected_samples += 1;
+            }
         }
     }
     let n = settings.spp as f64;

@@ -1,14 +1,14 @@
 //! The renderable scene: geometry with its acceleration structure, materials, emitters, lights
 //! and the camera. Built once by [`SceneBuilder`]; immutable and shared by all threads after.
 
-use crate::accel::{Accel, AccelKind};
+use crate::accel::{Accel, AccelKind, BatchHits};
 use crate::camera::Camera;
 use crate::color::Rgb;
 use crate::geometry::{Geometry, Object};
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::light::{AreaLight, Emission, Light};
 use crate::material::{Material, MaterialId};
-use crate::math::{Point3, Ray, Transform, Vec3};
+use crate::math::{Point3, Ray, RayBatch, Transform, Vec3};
 use crate::shape::{Mesh, Shape, ShearedRay};
 use crate::stats::RayStats;
 
@@ -79,6 +79,63 @@ impl Scene {
             stats.prim_tests += 1;
             self.geometry.intersect_prim(p, ray, &sr).is_some()
         }) || self.accel.occluded(&self.geometry, ray, stats)
+    }
+
+    /// The closest hit of every active lane of `rays`: the hits [`Scene::intersect`] gives ray
+    /// by ray, small scenes testing each primitive against all lanes at once.
+    #[inline]
+    pub fn intersect_batch(&self, rays: &RayBatch, hits: &mut BatchHits, stats: &mut RayStats) {
+        stats.rays += rays.active.count_ones() as u64;
+        self.accel
+            .intersect_batch(&self.geometry, rays, hits, stats);
+        if self.geometry.bounded_count() == self.geometry.prim_count() {
+            return;
+        }
+        // The unbounded primitives (planes, which ignore the sheared ray), lane by lane.
+        let sr = ShearedRay::unused();
+        for i in rays.lanes() {
+            let mut r = rays.ray(i);
+            let best = &mut hits[i];
+            if let Some(b) = best {
+                r.tmax = b.t.next_up();
+            }
+            for prim in self.geometry.bounded_count()..self.geometry.prim_count() {
+                stats.prim_tests += 1;
+                if let Some(h) = self.geometry.intersect_prim(prim, &r, &sr) {
+                    if crate::accel::closest(best, h) {
+                        r.tmax = h.t.next_up();
+                    }
+                }
+            }
+        }
+    }
+
+    /// The active lanes of `rays` that something blocks within their interval (bit i for
+    /// lane i).
+    #[inline]
+    pub fn occluded_batch(&self, rays: &RayBatch, stats: &mut RayStats) -> u32 {
+        stats.shadow_rays += rays.active.count_ones() as u64;
+        let mut hit = 0;
+        if self.geometry.bounded_count() != self.geometry.prim_count() {
+            let sr = ShearedRay::unused();
+            for i in rays.lanes() {
+                let r = rays.ray(i);
+                if (self.geometry.bounded_count()..self.geometry.prim_count()).any(|p| {
+                    stats.prim_tests += 1;
+                    self.geometry.intersect_prim(p, &r, &sr).is_some()
+                }) {
+                    hit |= 1 << i;
+                }
+            }
+        }
+        let rest = RayBatch {
+            active: rays.active & !hit,
+            ..*rays
+        };
+        if rest.active != 0 {
+            hit |= self.accel.occluded_batch(&self.geometry, &rest, stats);
+        }
+        hit
     }
 
     /// True when nothing lies strictly between the points `a` and `b`.

@@ -33,7 +33,7 @@ mod prims;
 mod test_scenes;
 mod visit;
 
-pub use bvh::{Bvh, BvhNode};
+pub use bvh::{BatchHits, Bvh, BvhNode};
 #[cfg(feature = "embree")]
 pub use embree::Embree;
 pub use grid::Grid;
@@ -46,7 +46,7 @@ use prims::{inflate, margin, union_bounds};
 
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
-use crate::math::Ray;
+use crate::math::{Ray, RayBatch, BATCH};
 use crate::stats::RayStats;
 
 /// Which acceleration structure to build.
@@ -221,6 +221,43 @@ impl Accel {
             #[cfg(feature = "embree")]
             Accel::Embree(e) => e.occluded(geometry, ray, stats),
         }
+    }
+
+    /// The closest hit of every active lane of `rays` (the same hits as [`Accel::intersect`]
+    /// ray by ray).
+    pub fn intersect_batch(
+        &self,
+        geometry: &Geometry,
+        rays: &RayBatch,
+        hits: &mut BatchHits,
+        stats: &mut RayStats,
+    ) {
+        if let Accel::Bvh(b) = self {
+            return b.intersect_batch(geometry, rays, hits, stats);
+        }
+        *hits = [None; BATCH];
+        for i in rays.lanes() {
+            hits[i] = self.intersect(geometry, &rays.ray(i), stats);
+        }
+    }
+
+    /// The active lanes of `rays` that hit anything (bit i for lane i).
+    pub fn occluded_batch(
+        &self,
+        geometry: &Geometry,
+        rays: &RayBatch,
+        stats: &mut RayStats,
+    ) -> u32 {
+        if let Accel::Bvh(b) = self {
+            return b.occluded_batch(geometry, rays, stats);
+        }
+        let mut hit = 0;
+        for i in rays.lanes() {
+            if self.occluded(geometry, &rays.ray(i), stats) {
+                hit |= 1 << i;
+            }
+        }
+        hit
     }
 }
 

@@ -51,13 +51,19 @@ pub(crate) fn shadowed(
     target: Target,
     stats: &mut RayStats,
 ) -> bool {
-    let ray = match target {
+    scene.occluded(&shadow_ray(si, wi, target), stats)
+}
+
+/// The ray that tests whether the light's target (in direction `wi`) is visible from the
+/// surface point.
+#[inline(always)]
+pub(crate) fn shadow_ray(si: &SurfaceInteraction, wi: Vec3, target: Target) -> Ray {
+    match target {
         Target::Point(p) => si.spawn_ray_to(p),
         // Both normals are unit normals (of an interaction and of a light's surface).
         Target::Surface(p, n) => Ray::spawn_between_unit(si.p, si.n, p, n),
         Target::Infinite => si.spawn_ray(wi),
-    };
-    scene.occluded(&ray, stats)
+    }
 }
 
 /// The local model at a surface point, with or without shadow rays.

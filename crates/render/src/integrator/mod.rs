@@ -16,7 +16,7 @@ pub use whitted::Whitted;
 
 use crate::color::Rgb;
 use crate::math::Ray;
-use crate::sampling::Sampler;
+use crate::sampling::{SampleCursor, Sampler};
 use crate::scene::Scene;
 use crate::stats::RayStats;
 
@@ -31,6 +31,26 @@ pub trait Integrator: Sync {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Rgb;
+
+    /// The radiance along each of `rays` (at most [`crate::math::BATCH`]), samples of one
+    /// pixel: ray i continues the sample at `cursors[i]` (left at its end) and its radiance
+    /// goes to `out[i]`. Each result equals what [`Integrator::radiance`] gives for that ray
+    /// and sample alone; integrators that can trace paths side by side do so.
+    fn radiance_batch(
+        &self,
+        scene: &Scene,
+        rays: &[Ray],
+        cursors: &mut [SampleCursor],
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        out: &mut [Rgb],
+    ) {
+        for (i, ray) in rays.iter().enumerate() {
+            sampler.resume(cursors[i]);
+            out[i] = self.radiance(scene, ray, sampler, stats);
+            cursors[i] = sampler.cursor();
+        }
+    }
 }
 
 /// Settings that integrators read (each ignores what it does not use).

@@ -12,9 +12,10 @@
 
 use super::Integrator;
 use crate::color::Rgb;
-use crate::math::Ray;
+use crate::interaction::Hit;
+use crate::math::{Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
-use crate::sampling::Sampler;
+use crate::sampling::{SampleCursor, Sampler};
 use crate::scene::Scene;
 use crate::stats::RayStats;
 
@@ -39,6 +40,187 @@ impl Default for Path {
     }
 }
 
+/// A path between two vertices: what it has gathered, its throughput, the ray it continues
+/// along and what multiple importance sampling needs of the vertex it left.
+#[derive(Clone, Copy, Debug)]
+struct PathState {
+    l: Rgb,
+    beta: Rgb,
+    ray: Ray,
+    /// The previous vertex's BSDF density and whether it was a Dirac delta, for MIS.
+    prev_pdf: f32,
+    prev_delta: bool,
+    prev_p: crate::math::Point3,
+    eta_scale: f32,
+    depth: u32,
+}
+
+impl PathState {
+    fn new(camera_ray: &Ray) -> Self {
+        Self {
+            l: Rgb::BLACK,
+            beta: Rgb::WHITE,
+            ray: *camera_ray,
+            prev_pdf: 0.0,
+            prev_delta: true,
+            prev_p: camera_ray.o,
+            eta_scale: 1.0,
+            depth: 0,
+        }
+    }
+}
+
+/// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
+/// ray is unblocked (next-event estimation), and whether the path goes on.
+struct VertexOutcome {
+    shadow: Option<(Ray, Rgb)>,
+    alive: bool,
+}
+
+impl Path {
+    /// The vertex where `st.ray` ends (`hit`, or nothing when it escapes): adds the emission
+    /// found there, samples a light (the shadow ray is the caller's to test), samples the
+    /// next direction and plays Russian roulette.
+    #[inline(always)]
+    fn vertex(
+        &self,
+        scene: &Scene,
+        st: &mut PathState,
+        hit: Option<Hit>,
+        sampler: &mut Sampler,
+    ) -> VertexOutcome {
+        let done = VertexOutcome {
+            shadow: None,
+            alive: false,
+        };
+        let max_depth = self.max_depth.unwrap_or(u32::MAX);
+        let light_pick = if scene.lights.is_empty() {
+            0.0
+        } else {
+            1.0 / scene.lights.len() as f32
+        };
+        let Some(hit) = hit else {
+            // Lights at infinity, weighted against their own sampling.
+            if st.depth > 0 || !self.hide_emitters {
+                let d = st.ray.d.normalize();
+                st.l += st.beta * scene.background;
+                for &i in &scene.infinite_lights {
+                    let light = &scene.lights[i as usize];
+                    let le = light.escaped(d);
+                    if le.is_black() {
+                        continue;
+                    }
+                    let w = if st.prev_delta {
+                        1.0
+                    } else {
+                        power_heuristic(1.0, st.prev_pdf, 1.0, light_pick * light.pdf_escape(d))
+                    };
+                    st.l += st.beta * le * w;
+                }
+            }
+            return done;
+        };
+        let si = scene.geometry.interaction(&st.ray, &hit);
+
+        // Emission found by BSDF sampling (or by the camera).
+        if st.depth > 0 || !self.hide_emitters {
+            let le = scene.emitted(&si);
+            if !le.is_black() {
+                let w = match si.props.light {
+                    Some(li) if !st.prev_delta => {
+                        let pdf_light =
+                            light_pick * scene.lights[li as usize].pdf_hit(st.prev_p, si.p, si.n);
+                        power_heuristic(1.0, st.prev_pdf, 1.0, pdf_light)
+                    }
+                    _ => 1.0,
+                };
+                st.l += st.beta * le * w;
+            }
+        }
+        if st.depth + 1 >= max_depth {
+            return done;
+        }
+
+        let bsdf = scene.material(&si).bsdf(si.shading_frame(), si.uv);
+        // The outgoing direction in the shading frame, shared by every BSDF query below.
+        let (wo, flip) = bsdf.local_wo(si.wo);
+
+        // Next-event estimation: one light, chosen uniformly.
+        let mut shadow = None;
+        if !bsdf.is_delta() && light_pick > 0.0 {
+            let n = scene.lights.len() as u32;
+            let pick = if n == 1 { 0 } else { sampler.next_index(n) };
+            let u = sampler.next_2d();
+            let light = &scene.lights[pick as usize];
+            if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u) {
+                let wi = bsdf.local_wi(ls.wi, flip);
+                let f = bsdf.eval_local(wo, wi);
+                if !f.is_black() {
+                    let pdf_light = light_pick * ls.pdf;
+                    let w = if ls.delta {
+                        1.0
+                    } else {
+                        power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
+                    };
+                    shadow = Some((
+                        super::local::shadow_ray(&si, ls.wi, ls.target),
+                        st.beta * f * ls.li * (w / pdf_light),
+                    ));
+                }
+            }
+        } else if !bsdf.is_delta() {
+            // Keep the sample stream aligned whether or not lights exist.
+            sampler.next_1d();
+            sampler.next_2d();
+        }
+
+        // BSDF sampling continues the path.
+        let u1 = sampler.next_1d();
+        let u2 = sampler.next_2d();
+        let Some(bs) = bsdf.sample_local(wo, flip, u1, u2) else {
+            return VertexOutcome {
+                shadow,
+                alive: false,
+            };
+        };
+        st.beta *= bs.weight;
+        if st.beta.is_black() {
+            return VertexOutcome {
+                shadow,
+                alive: false,
+            };
+        }
+        st.prev_pdf = bs.pdf;
+        st.prev_delta = bs.delta;
+        st.prev_p = si.p;
+        st.eta_scale *= bs.eta * bs.eta;
+        st.ray = si.spawn_ray(bs.wi);
+        st.depth += 1;
+
+        // Russian roulette from `rr_depth` on: the path survives with probability
+        // q = min(max(β)·Πη², 0.95), where Πη² is the product of the squared relative
+        // indices of the refractions taken so far (`eta_scale`), and survivors are divided
+        // by q. Refraction into a denser medium scales radiance (and so β) by 1/η²;
+        // multiplying it back out keeps paths inside glass from being terminated for
+        // that compression alone, which would make their survivors fireflies (as pbrt-v4
+        // and Mitsuba 3 do).
+        if st.depth >= self.rr_depth {
+            let q = (st.beta.max_component() * st.eta_scale).min(0.95);
+            if !(sampler.next_1d() < q) {
+                return VertexOutcome {
+                    shadow,
+                    alive: false,
+                };
+            }
+            st.beta /= q;
+        }
+        VertexOutcome {
+            shadow,
+            alive: true,
+        }
+    }
+}
+
 impl Integrator for Path {
     fn radiance(
         &self,
@@ -47,127 +229,86 @@ impl Integrator for Path {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Rgb {
-        let max_depth = self.max_depth.unwrap_or(u32::MAX);
-        let light_pick = if scene.lights.is_empty() {
-            0.0
-        } else {
-            1.0 / scene.lights.len() as f32
-        };
-        let mut l = Rgb::BLACK;
-        let mut beta = Rgb::WHITE;
-        let mut ray = *camera_ray;
-        // The previous vertex's BSDF density and whether it was a Dirac delta, for MIS.
-        let mut prev_pdf = 0.0f32;
-        let mut prev_delta = true;
-        let mut prev_p = ray.o;
-        let mut eta_scale = 1.0f32;
-        let mut depth = 0u32;
+        let mut st = PathState::new(camera_ray);
         loop {
-            let Some(si) = scene.interact(&ray, stats) else {
-                // Lights at infinity, weighted against their own sampling.
-                if depth > 0 || !self.hide_emitters {
-                    let d = ray.d.normalize();
-                    l += beta * scene.background;
-                    for &i in &scene.infinite_lights {
-                        let light = &scene.lights[i as usize];
-                        let le = light.escaped(d);
-                        if le.is_black() {
-                            continue;
-                        }
-                        let w = if prev_delta {
-                            1.0
-                        } else {
-                            power_heuristic(1.0, prev_pdf, 1.0, light_pick * light.pdf_escape(d))
-                        };
-                        l += beta * le * w;
-                    }
-                }
-                break;
-            };
-
-            // Emission found by BSDF sampling (or by the camera).
-            if depth > 0 || !self.hide_emitters {
-                let le = scene.emitted(&si);
-                if !le.is_black() {
-                    let w = match si.props.light {
-                        Some(li) if !prev_delta => {
-                            let pdf_light =
-                                light_pick * scene.lights[li as usize].pdf_hit(prev_p, si.p, si.n);
-                            power_heuristic(1.0, prev_pdf, 1.0, pdf_light)
-                        }
-                        _ => 1.0,
-                    };
-                    l += beta * le * w;
+            let hit = scene.intersect(&st.ray, stats);
+            let out = self.vertex(scene, &mut st, hit, sampler);
+            if let Some((ray, c)) = out.shadow {
+                if !scene.occluded(&ray, stats) {
+                    st.l += c;
                 }
             }
-            if depth + 1 >= max_depth {
-                break;
-            }
-
-            let bsdf = scene.material(&si).bsdf(si.shading_frame(), si.uv);
-            // The outgoing direction in the shading frame, shared by every BSDF query below.
-            let (wo, flip) = bsdf.local_wo(si.wo);
-
-            // Next-event estimation: one light, chosen uniformly.
-            if !bsdf.is_delta() && light_pick > 0.0 {
-                let n = scene.lights.len() as u32;
-                let pick = if n == 1 { 0 } else { sampler.next_index(n) };
-                let u = sampler.next_2d();
-                let light = &scene.lights[pick as usize];
-                if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u) {
-                    let wi = bsdf.local_wi(ls.wi, flip);
-                    let f = bsdf.eval_local(wo, wi);
-                    if !f.is_black() && !super::local::shadowed(scene, &si, ls.wi, ls.target, stats)
-                    {
-                        let pdf_light = light_pick * ls.pdf;
-                        let w = if ls.delta {
-                            1.0
-                        } else {
-                            power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
-                        };
-                        l += beta * f * ls.li * (w / pdf_light);
-                    }
-                }
-            } else if !bsdf.is_delta() {
-                // Keep the sample stream aligned whether or not lights exist.
-                sampler.next_1d();
-                sampler.next_2d();
-            }
-
-            // BSDF sampling continues the path.
-            let u1 = sampler.next_1d();
-            let u2 = sampler.next_2d();
-            let Some(bs) = bsdf.sample_local(wo, flip, u1, u2) else {
-                break;
-            };
-            beta *= bs.weight;
-            if beta.is_black() {
-                break;
-            }
-            prev_pdf = bs.pdf;
-            prev_delta = bs.delta;
-            prev_p = si.p;
-            eta_scale *= bs.eta * bs.eta;
-            ray = si.spawn_ray(bs.wi);
-            depth += 1;
-
-            // Russian roulette from `rr_depth` on: the path survives with probability
-            // q = min(max(β)·Πη², 0.95), where Πη² is the product of the squared relative
-            // indices of the refractions taken so far (`eta_scale`), and survivors are divided
-            // by q. Refraction into a denser medium scales radiance (and so β) by 1/η²;
-            // multiplying it back out keeps paths inside glass from being terminated for
-            // that compression alone, which would make their survivors fireflies (as pbrt-v4
-            // and Mitsuba 3 do).
-            if depth >= self.rr_depth {
-                let q = (beta.max_component() * eta_scale).min(0.95);
-                if !(sampler.next_1d() < q) {
-                    break;
-                }
-                beta /= q;
+            if !out.alive {
+                return st.l;
             }
         }
-        l
     }
+
+    /// Up to [`BATCH`] paths side by side: their rays are traced together (small scenes test
+    /// each primitive against all of them at once), their vertices shaded one by one, each
+    /// drawing from its own sample's cursor. Every path gets the radiance
+    /// [`Integrator::radiance`] gives it alone, bit for bit.
+    fn radiance_batch(
+        &self,
+        scene: &Scene,
+        rays: &[Ray],
+        cursors: &mut [SampleCursor],
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        out: &mut [Rgb],
+    ) {
+        let n = rays.len();
+        debug_assert!(n <= BATCH && cursors.len() == n && out.len() >= n);
+        let mut st =
+            [PathState::new(&Ray::new(crate::math::Point3::ORIGIN, crate::math::Vec3::X)); BATCH];
+        for (s, r) in st.iter_mut().zip(rays) {
+            *s = PathState::new(r);
+        }
+        let mut alive: u32 = (1u32 << n) - 1;
+        let mut hits = [None; BATCH];
+        let mut pending = [Rgb::BLACK; BATCH];
+        while alive != 0 {
+            let mut batch = RayBatch::default();
+            for i in lanes(alive) {
+                batch.set(i, &st[i].ray);
+            }
+            scene.intersect_batch(&batch, &mut hits, stats);
+            let mut shadows = RayBatch::default();
+            for i in lanes(alive) {
+                sampler.resume(cursors[i]);
+                let o = self.vertex(scene, &mut st[i], hits[i], sampler);
+                cursors[i] = sampler.cursor();
+                if let Some((ray, c)) = o.shadow {
+                    shadows.set(i, &ray);
+                    pending[i] = c;
+                }
+                if !o.alive {
+                    alive &= !(1 << i);
+                }
+            }
+            if shadows.active != 0 {
+                let blocked = scene.occluded_batch(&shadows, stats);
+                for i in lanes(shadows.active & !blocked) {
+                    st[i].l += pending[i];
+                }
+            }
+        }
+        for i in 0..n {
+            out[i] = st[i].l;
+        }
+    }
+}
+
+/// The set bits of `m`, lowest first.
+#[inline(always)]
+fn lanes(mut m: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (m != 0).then(|| {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            i
+        })
+    })
 }
 
 /// The course's branching path tracer.

@@ -3,12 +3,14 @@
 mod bounds;
 mod frame;
 mod ray;
+mod ray_batch;
 mod transform;
 mod vector;
 
 pub use bounds::{Bounds3, GAMMA3};
 pub use frame::Frame;
 pub use ray::{offset_ray_origin, Ray, SHADOW_EPSILON};
+pub use ray_batch::{RayBatch, BATCH};
 pub use transform::{Matrix4, Transform};
 pub use vector::{abs_dot, Normal3, Point2, Point3, Vec3};
 

@@ -7,4 +7,4 @@ pub mod warp;
 
 pub use distribution::{Distribution1D, Distribution2D};
 pub use pcg::Pcg32;
-pub use sampler::{Sampler, SamplerKind};
+pub use sampler::{SampleCursor, Sampler, SamplerKind};

@@ -4,7 +4,7 @@
 //! `Pcg32::new(42, 54)` reproduces the reference implementation's sequence.
 
 /// The PCG32 generator (XSH RR output function).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Pcg32 {
     state: u64,
     inc: u64,
@@ -127,7 +127,7 @@ mod tests {
     #[test]
     fn advance_skips_ahead_exactly() {
         let mut a = Pcg32::new(7, 11);
-        let mut b = a.clone();
+        let mut b = a;
         for _ in 0..1000 {
             a.next_u32();
         }

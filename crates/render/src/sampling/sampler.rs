@@ -45,10 +45,20 @@ impl SamplerKind {
     }
 }
 
+/// Where a sample of a pixel is: see [`Sampler::cursor`].
+#[derive(Clone, Copy, Debug)]
+pub struct SampleCursor {
+    index: u32,
+    dim: u32,
+    rng: Pcg32,
+}
+
 /// The sample source handed to integrators: uniform numbers in `[0, 1)`.
 #[derive(Clone, Debug)]
 pub struct Sampler {
     rng: Pcg32,
+    /// The pixel's seed (independent samplers seed each sample's stream with it).
+    pixel_seed: u64,
     spp: u32,
     /// How the numbers are made, with the pixel's pattern seed.
     mode: Mode,
@@ -133,6 +143,7 @@ impl Sampler {
         let h = hash2(seed, pixel);
         let pattern = (h >> 32) as u32 ^ h as u32;
         self.rng = Pcg32::new(h, pixel);
+        self.pixel_seed = h;
         self.spp = spp.max(1);
         self.mode = match kind {
             SamplerKind::Sobol => Mode::Sobol(pattern),
@@ -152,6 +163,7 @@ impl Sampler {
     pub fn new(seed: u64, stream: u64) -> Self {
         Self {
             rng: Pcg32::new(hash2(seed, stream), stream),
+            pixel_seed: hash2(seed, stream),
             spp: 1,
             mode: Mode::Independent,
             index: 0,
@@ -172,11 +184,44 @@ impl Sampler {
         self.index = index;
         self.rindex = index.reverse_bits();
         self.dim = 0;
+        if let Mode::Independent = self.mode {
+            // Every sample its own stream, so that a sample's numbers do not depend on how
+            // many the samples before it drew.
+            self.rng = Pcg32::new(hash2(self.pixel_seed, index as u64), index as u64);
+        }
         let chunk = index & !(CHUNK as u32 - 1);
         if chunk != self.chunk {
             self.chunk = chunk;
             self.batched = 0;
         }
+    }
+
+    /// Where the current sample is: its index and next dimension (with an independent
+    /// sampler's stream). Paths traced side by side each keep theirs and [`Sampler::resume`]
+    /// it before drawing.
+    #[inline]
+    pub fn cursor(&self) -> SampleCursor {
+        SampleCursor {
+            index: self.index,
+            dim: self.dim,
+            rng: self.rng,
+        }
+    }
+
+    /// Continues the sample at `c` (a [`Sampler::cursor`] of this pixel).
+    #[inline]
+    pub fn resume(&mut self, c: SampleCursor) {
+        if c.index != self.index {
+            self.index = c.index;
+            self.rindex = c.index.reverse_bits();
+            let chunk = c.index & !(CHUNK as u32 - 1);
+            if chunk != self.chunk {
+                self.chunk = chunk;
+                self.batched = 0;
+            }
+        }
+        self.dim = c.dim;
+        self.rng = c.rng;
     }
 
     /// The position of sample `index` inside the pixel, in `[0,1)²`: the pixel centre when the

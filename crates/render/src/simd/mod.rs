@@ -9,6 +9,11 @@
 //! CPU that has them: the same SSE operations in VEX form (three operands, fewer moves) and
 //! cheaper bit scans. No arithmetic changes: floating-point contraction stays off.
 //!
+//! [`run_wide`] executes a kernel over sixteen lanes ([`Wide`]) with the widest registers the
+//! CPU has: one AVX-512 register, two AVX registers or four SSE ones. Every width gives the
+//! same bits. The environment variable `CANDELA_SIMD` (`sse`, `avx2`, `avx512`) caps the
+//! choice, for tests and comparisons.
+//!
 //! This module sits below everything that uses vectors (the samplers, the accelerators).
 
 // Why unsafe code is allowed in this file:
@@ -21,11 +26,15 @@
 
 mod f4;
 mod isa;
+mod wide;
 
 pub(crate) use f4::F4;
 #[cfg(target_arch = "x86_64")]
 use isa::Avx2;
 pub(crate) use isa::{Isa, Sse};
+pub(crate) use wide::Wide;
+#[cfg(target_arch = "x86_64")]
+use wide::{Avx2x2, Avx512, Sse4};
 
 /// A kernel to run with the best instruction set: its `run` must be `#[inline(always)]` so
 /// that it is compiled into each version.
@@ -97,4 +106,97 @@ pub(crate) fn prefetch<T>(x: &T) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = x;
+}
+
+/// A kernel over sixteen lanes, for [`run_wide`]: its `run` must be `#[inline(always)]` so
+/// that it is compiled into each version.
+pub(crate) trait WideKernel {
+    /// What it returns.
+    type Output;
+    /// Runs it with the operations of `w`.
+    fn run<W: Wide>(self, w: W) -> Self::Output;
+}
+
+/// The instruction sets [`run_wide`] chooses from, narrowest first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum SimdLevel {
+    /// Four SSE registers (every x86-64 CPU; plain arrays elsewhere).
+    Sse,
+    /// Two AVX registers (AVX2).
+    Avx2,
+    /// One AVX-512 register (AVX-512F).
+    Avx512,
+}
+
+impl SimdLevel {
+    /// The widest level this CPU supports, capped by `CANDELA_SIMD` (asked once, then cached).
+    pub fn detected() -> SimdLevel {
+        use std::sync::atomic::{AtomicU8, Ordering};
+        static CACHE: AtomicU8 = AtomicU8::new(0);
+        match CACHE.load(Ordering::Relaxed) {
+            1 => SimdLevel::Sse,
+            2 => SimdLevel::Avx2,
+            3 => SimdLevel::Avx512,
+            _ => {
+                let level = Self::supported().min(match std::env::var("CANDELA_SIMD").as_deref() {
+                    Ok("sse") => SimdLevel::Sse,
+                    Ok("avx2") => SimdLevel::Avx2,
+                    _ => SimdLevel::Avx512,
+                });
+                CACHE.store(level as u8 + 1, Ordering::Relaxed);
+                level
+            }
+        }
+    }
+
+    /// The widest level the CPU supports.
+    pub fn supported() -> SimdLevel {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") && has_avx2() {
+                return SimdLevel::Avx512;
+            }
+            if has_avx2() {
+                return SimdLevel::Avx2;
+            }
+        }
+        SimdLevel::Sse
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx2,bmi1,bmi2,lzcnt,popcnt")]
+fn run_avx512<K: WideKernel>(k: K) -> K::Output {
+    // SAFETY: this function is only called on a CPU with AVX-512F (see `run_wide_at`).
+    k.run(unsafe { Avx512::new() })
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+fn run_avx2x2<K: WideKernel>(k: K) -> K::Output {
+    // SAFETY: this function is only called on a CPU with AVX2 (see `run_wide_at`).
+    k.run(unsafe { Avx2x2::new() })
+}
+
+/// Runs `k` at `level`, or at the widest level below it that the CPU supports.
+#[inline(always)]
+pub(crate) fn run_wide_at<K: WideKernel>(level: SimdLevel, k: K) -> K::Output {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let level = level.min(SimdLevel::supported());
+        if level == SimdLevel::Avx512 {
+            // SAFETY: the CPU supports every feature `run_avx512` is compiled with.
+            return unsafe { run_avx512(k) };
+        }
+        if level == SimdLevel::Avx2 {
+            // SAFETY: the CPU supports every feature `run_avx2x2` is compiled with.
+            return unsafe { run_avx2x2(k) };
+        }
+        k.run(Sse4)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = level;
+        k.run(wide::Portable)
+    }
 }

@@ -66,6 +66,9 @@ impl Bvh {
         bvh.pack_triangles(geometry);
         bvh.pack_objects(geometry);
         bvh.flat = bvh.flat_root();
+        if !bvh.flat.is_empty() {
+            (bvh.flat_prims, bvh.flat_rest) = bvh.flat_split(geometry);
+        }
         bvh
     }
 }

@@ -36,11 +36,15 @@
 //! as in the list. The sheared ray of the triangle test and the reciprocal direction are
 //! computed once per ray (and not at all for scenes without triangles).
 
+mod batch;
 mod build;
 mod layout;
 mod traverse;
 
+pub use batch::BatchHits;
 pub use layout::{BvhNode, Tri4};
+
+use batch::FlatPrim;
 
 use super::blocks::{Box4, Quad4, Sphere4};
 use layout::Ref;
@@ -58,6 +62,10 @@ pub struct Bvh {
     /// When every child of the root is a leaf (small scenes): those leaves, tested one after
     /// the other without box tests or a stack.
     flat: Vec<Ref>,
+    /// For batches of rays through a flat tree: its parallelograms, spheres and boxes in id
+    /// order (tested sixteen rays at a time), and its other leaves (tested ray by ray).
+    flat_prims: Vec<FlatPrim>,
+    flat_rest: Vec<Ref>,
     /// Primitive ids in leaf order (other leaves index it).
     ids: Vec<u32>,
 }
@@ -72,6 +80,8 @@ impl Default for Bvh {
             spheres: Vec::new(),
             boxes: Vec::new(),
             flat: Vec::new(),
+            flat_prims: Vec::new(),
+            flat_rest: Vec::new(),
             ids: Vec::new(),
         }
     }

@@ -2,7 +2,8 @@
 //! closest hits, any order for shadow rays; leaves of triangles tested four at a time.
 
 use super::layout::{
-    BvhNode, Ref, Tri4, BOX_LEAF, COUNT_MASK, OBJ_LEAF, QUAD_LEAF, SPHERE_LEAF, STACK, TRI_LEAF, W,
+    BvhNode, Kind, Ref, Tri4, BOX_LEAF, COUNT_MASK, OBJ_LEAF, QUAD_LEAF, SPHERE_LEAF, STACK,
+    TRI_LEAF, W,
 };
 use super::Bvh;
 use crate::accel::blocks::{BlockHit, BlockRay};
@@ -70,10 +71,67 @@ impl Bvh {
         }
     }
 
-    /// The root's children when all of them are leaves (a small scene), else nothing.
+    /// The id of lane `lane` of block `block` of a blocked leaf of `kind`.
+    pub(super) fn block_id(&self, kind: Kind, block: usize, lane: usize) -> u32 {
+        match kind {
+            Kind::Quad => self.quads[block].1[lane],
+            Kind::Sphere => self.spheres[block].1[lane],
+            Kind::Box => self.boxes[block].1[lane],
+            Kind::Tri => self.tris[block].id[lane],
+            Kind::Other => self.ids[block * 4 + lane],
+        }
+    }
+
+    /// The closest hit of `ray` among the primitives of leaf `r`.
+    pub(super) fn leaf_closest(
+        &self,
+        geometry: &Geometry,
+        r: Ref,
+        ray: &Ray,
+        stats: &mut RayStats,
+    ) -> Option<Hit> {
+        let mut q = ClosestQuery {
+            geometry,
+            ray: *ray,
+            tri: TriRay::new(ray, !self.tris.is_empty()),
+            block: BlockRay::new(ray),
+            best: None,
+            tests: 0,
+        };
+        q.leaf(self, r);
+        stats.prim_tests += q.tests;
+        q.best
+    }
+
+    /// True when `ray` hits a primitive of leaf `r`.
+    pub(super) fn leaf_any(
+        &self,
+        geometry: &Geometry,
+        r: Ref,
+        ray: &Ray,
+        stats: &mut RayStats,
+    ) -> bool {
+        let mut q = AnyQuery {
+            geometry,
+            ray,
+            tri: TriRay::new(ray, !self.tris.is_empty()),
+            block: BlockRay::new(ray),
+            tests: 0,
+        };
+        let hit = q.leaf(self, r);
+        stats.prim_tests += q.tests;
+        hit
+    }
+
+    /// The root's children when all of them are leaves (a small scene), the root when it is a
+    /// leaf, else nothing.
     pub(super) fn flat_root(&self) -> Vec<Ref> {
         if self.root.meta != 0 {
-            return Vec::new();
+            return if self.root.meta & COUNT_MASK != 0 {
+                vec![self.root]
+            } else {
+                Vec::new()
+            };
         }
         let root = &self.nodes[self.root.child as usize];
         let kids: Vec<Ref> = (0..W)
