@@ -267,13 +267,16 @@ impl Integrator for Path {
         let mut alive: u32 = (1u32 << n) - 1;
         let mut hits = [None; BATCH];
         let mut pending = [Rgb::BLACK; BATCH];
+        // Only the active lanes are read: the batches are filled, not cleared, at each step.
+        let mut batch = RayBatch::default();
+        let mut shadows = RayBatch::default();
         while alive != 0 {
-            let mut batch = RayBatch::default();
+            batch.active = 0;
             for i in lanes(alive) {
                 batch.set(i, &st[i].ray);
             }
             scene.intersect_batch(&batch, &mut hits, stats);
-            let mut shadows = RayBatch::default();
+            shadows.active = 0;
             for i in lanes(alive) {
                 sampler.resume(cursors[i]);
                 let o = self.vertex(scene, &mut st[i], hits[i], sampler);

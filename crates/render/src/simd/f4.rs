@@ -172,6 +172,26 @@ mod sse {
         pub(crate) fn bits(self) -> u32 {
             unsafe { _mm_movemask_ps(self.0) as u32 }
         }
+
+        /// `|self|` (the sign bit cleared).
+        #[inline(always)]
+        pub(crate) fn abs(self) -> F4 {
+            F4(unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), self.0) })
+        }
+
+        /// Each lane moved by `k` (truncated to an integer, |k| < 2³¹) units in the last place:
+        /// `f32::from_bits(x.to_bits() + k)` for x ≥ +0, `f32::from_bits(x.to_bits() − k)` for
+        /// x with its sign bit set (away from zero for k > 0).
+        #[inline(always)]
+        pub(crate) fn move_ulps(self, k: F4) -> F4 {
+            unsafe {
+                let ki = _mm_cvttps_epi32(k.0);
+                let bits = _mm_castps_si128(self.0);
+                let sign = _mm_srai_epi32::<31>(bits);
+                let adj = _mm_sub_epi32(_mm_xor_si128(ki, sign), sign);
+                F4(_mm_castsi128_ps(_mm_add_epi32(bits, adj)))
+            }
+        }
     }
 }
 
@@ -272,6 +292,16 @@ mod portable {
         }
         pub(crate) fn bits(self) -> u32 {
             (0..4).fold(0, |m, i| m | (self.0[i].to_bits() >> 31) << i)
+        }
+        pub(crate) fn abs(self) -> F4 {
+            F4(self.0.map(f32::abs))
+        }
+        pub(crate) fn move_ulps(self, k: F4) -> F4 {
+            F4(std::array::from_fn(|i| {
+                let (x, k) = (self.0[i], k.0[i] as i32);
+                let b = x.to_bits() as i32;
+                f32::from_bits(b.wrapping_add(if b < 0 { -k } else { k }) as u32)
+            }))
         }
     }
 }
