@@ -284,9 +284,35 @@ impl Sampler {
         });
     }
 
+    /// The tabulated pair of the current dimension of a Sobol sampler, when the chunk's table
+    /// holds it (the common case, kept inline; [`Sampler::batched`] fills tables).
+    #[inline(always)]
+    fn tabulated(&self) -> Option<[f32; 2]> {
+        if let Mode::Sobol(_) = self.mode {
+            let d = self.dim as usize;
+            if d < BATCH_DIMS && self.batched & (1 << d) != 0 {
+                let j = self.index.wrapping_sub(self.chunk) as usize;
+                if j >= self.batch_from[d] as usize && j < CHUNK {
+                    return Some(self.batch[d][j]);
+                }
+            }
+        }
+        None
+    }
+
     /// The next uniform number.
-    #[inline]
+    #[inline(always)]
     pub fn next_1d(&mut self) -> f32 {
+        if let Some(p) = self.tabulated() {
+            self.dim += 1;
+            return p[0];
+        }
+        self.next_1d_general()
+    }
+
+    /// [`Sampler::next_1d`] for every case.
+    #[inline(never)]
+    fn next_1d_general(&mut self) -> f32 {
         match self.mode {
             Mode::Sobol(seed) => {
                 if let Some(p) = self.batched(seed) {
@@ -313,8 +339,18 @@ impl Sampler {
     }
 
     /// The next pair of uniform numbers.
-    #[inline]
+    #[inline(always)]
     pub fn next_2d(&mut self) -> [f32; 2] {
+        if let Some(p) = self.tabulated() {
+            self.dim += 2;
+            return p;
+        }
+        self.next_2d_general()
+    }
+
+    /// [`Sampler::next_2d`] for every case.
+    #[inline(never)]
+    fn next_2d_general(&mut self) -> [f32; 2] {
         match self.mode {
             Mode::Sobol(seed) => {
                 if let Some(p) = self.batched(seed) {
