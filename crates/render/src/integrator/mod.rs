@@ -3,6 +3,7 @@
 //! An integrator is chosen once per render (cold path), so it is a trait object; everything it
 //! calls per ray (shapes, materials, lights) is a closed enum.
 
+mod course_path;
 mod debug;
 mod local;
 mod path;
@@ -11,7 +12,8 @@ mod whitted;
 
 pub use debug::{Depth, Flat, Normals, OnOff};
 pub use local::{shade, Local};
-pub use path::{CoursePath, Path};
+pub use course_path::CoursePath;
+pub use path::Path;
 pub use whitted::Whitted;
 
 use crate::color::Rgb;

@@ -5,10 +5,7 @@
 //! is sampled; both estimates are combined by multiple importance sampling with the power
 //! heuristic (Veach 1997). Russian roulette starts at `rr_depth` (default 5). `max_depth` follows
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
-//!
-//! [`CoursePath`]: the course's estimator, which at every vertex spawns `num_of_rays` BSDF-sampled
-//! rays (no light sampling) and applies Russian roulette from a depth limit with survival
-//! probability max(0.05, 1 − max(ρ)).
+//! (The course's branching estimator is [`super::CoursePath`].)
 
 use super::Integrator;
 use crate::color::Rgb;
@@ -312,69 +309,4 @@ fn lanes(mut m: u32) -> impl Iterator<Item = usize> {
             i
         })
     })
-}
-
-/// The course's branching path tracer.
-#[derive(Clone, Copy, Debug)]
-pub struct CoursePath {
-    /// Rays spawned at every vertex.
-    pub num_of_rays: u32,
-    /// Longest path (bounces); `None` for unlimited (roulette still ends paths).
-    pub max_depth: Option<u32>,
-    /// Depth from which Russian roulette starts.
-    pub rr_depth: u32,
-}
-
-impl Integrator for CoursePath {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Rgb {
-        self.trace(scene, ray, 0, sampler, stats)
-    }
-}
-
-impl CoursePath {
-    fn trace(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        depth: u32,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Rgb {
-        if self.max_depth.is_some_and(|m| depth > m) {
-            return Rgb::BLACK;
-        }
-        let Some(si) = scene.interact(ray, stats) else {
-            return scene.escaped(ray.d.normalize());
-        };
-        let emitted = scene.emitted(&si);
-        let m = scene.material(&si);
-        let bsdf = m.bsdf(si.shading_frame(), si.uv);
-        // The course's roulette: survive with q = max(0.05, 1 − max reflectance).
-        let mut scale = 1.0;
-        if depth >= self.rr_depth {
-            let lum = m.base_color(si.uv).max_component();
-            let q = (1.0 - lum).max(0.05);
-            if sampler.next_1d() > q {
-                scale = 1.0 / (1.0 - q);
-            } else {
-                return emitted;
-            }
-        }
-        let mut sum = Rgb::BLACK;
-        for _ in 0..self.num_of_rays {
-            let u1 = sampler.next_1d();
-            let u2 = sampler.next_2d();
-            if let Some(bs) = bsdf.sample(si.wo, u1, u2) {
-                sum +=
-                    bs.weight * self.trace(scene, &si.spawn_ray(bs.wi), depth + 1, sampler, stats);
-            }
-        }
-        emitted + sum * (scale / self.num_of_rays as f32)
-    }
 }

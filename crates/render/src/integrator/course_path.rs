@@ -1,0 +1,75 @@
+//! The course's path tracer: at every vertex it spawns `num_of_rays` BSDF-sampled rays (no light
+//! sampling) and applies Russian roulette from a depth limit with survival probability
+//! max(0.05, 1 − max(ρ)).
+
+use super::Integrator;
+use crate::color::Rgb;
+use crate::math::Ray;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use crate::stats::RayStats;
+
+/// The course's branching path tracer.
+#[derive(Clone, Copy, Debug)]
+pub struct CoursePath {
+    /// Rays spawned at every vertex.
+    pub num_of_rays: u32,
+    /// Longest path (bounces); `None` for unlimited (roulette still ends paths).
+    pub max_depth: Option<u32>,
+    /// Depth from which Russian roulette starts.
+    pub rr_depth: u32,
+}
+
+impl Integrator for CoursePath {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
+        self.trace(scene, ray, 0, sampler, stats)
+    }
+}
+
+impl CoursePath {
+    fn trace(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        depth: u32,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> Rgb {
+        if self.max_depth.is_some_and(|m| depth > m) {
+            return Rgb::BLACK;
+        }
+        let Some(si) = scene.interact(ray, stats) else {
+            return scene.escaped(ray.d.normalize());
+        };
+        let emitted = scene.emitted(&si);
+        let m = scene.material(&si);
+        let bsdf = m.bsdf(si.shading_frame(), si.uv);
+        // The course's roulette: survive with q = max(0.05, 1 − max reflectance).
+        let mut scale = 1.0;
+        if depth >= self.rr_depth {
+            let lum = m.base_color(si.uv).max_component();
+            let q = (1.0 - lum).max(0.05);
+            if sampler.next_1d() > q {
+                scale = 1.0 / (1.0 - q);
+            } else {
+                return emitted;
+            }
+        }
+        let mut sum = Rgb::BLACK;
+        for _ in 0..self.num_of_rays {
+            let u1 = sampler.next_1d();
+            let u2 = sampler.next_2d();
+            if let Some(bs) = bsdf.sample(si.wo, u1, u2) {
+                sum +=
+                    bs.weight * self.trace(scene, &si.spawn_ray(bs.wi), depth + 1, sampler, stats);
+            }
+        }
+        emitted + sum * (scale / self.num_of_rays as f32)
+    }
+}
