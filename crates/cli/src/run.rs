@@ -234,7 +234,7 @@ fn render_and_write(
     let bar = if args.quiet {
         ProgressBar::hidden()
     } else {
-        let b = ProgressBar::new((settings.width * settings.height) as u64);
+        let b = ProgressBar::new((settings.width * settings.height) as u64 * settings.spp as u64);
         b.set_style(
             ProgressStyle::with_template(
                 "{spinner} [{elapsed_precise}] {wide_bar} {percent}% ETA {eta}",

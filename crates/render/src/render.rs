@@ -1,12 +1,19 @@
-//! The parallel tile renderer.
+//! The parallel renderer: passes of whole samples over tiles.
 //!
-//! The image is cut into 16×16 tiles rendered in parallel on the current rayon pool. Pixel
-//! (x, y) (row 0 at the top) takes `spp` samples from its own deterministic sampler, so the
-//! result depends only on the scene and the seed, never on the number of threads. Sample sums
-//! are accumulated in f64; samples whose radiance is NaN or infinite are rejected (counted in
-//! [`RayStats::rejected_samples`]) and contribute zero.
+//! A render adds samples to a [`Film`]: [`render_pass`] takes sample indices `first..last` of
+//! every pixel of the film's window, cutting the window into 16×16 tiles rendered in parallel on
+//! the current rayon pool. Pixel (x, y) (row 0 at the top) draws sample i from its own
+//! deterministic sequence (seeded by the image seed and the pixel index), so a sample's value
+//! depends only on the scene, the seed, the pixel and i, never on the thread, the pass or the
+//! process that traced it; and the film's fixed-point sums are exact, so any split of the
+//! samples (passes, tiles, crops, separate processes merged later) gives the same bits as one
+//! uninterrupted render. [`render`] is one pass of every sample.
+//!
+//! Samples whose radiance is NaN or infinite are rejected (counted in
+//! [`RayStats::rejected_samples`]): they count as samples but contribute zero.
 
 use crate::color::Rgb;
+use crate::film::{to_fixed, Film, Window};
 use crate::image::Image;
 use crate::integrator::Integrator;
 use crate::math::{Point3, Ray, Vec3, BATCH};
@@ -25,7 +32,7 @@ pub struct RenderSettings {
     pub width: usize,
     /// Image height in pixels (> 0).
     pub height: usize,
-    /// Samples per pixel (≥ 1); one sample goes through the pixel centre.
+    /// Samples per pixel of the whole frame (≥ 1); one sample goes through the pixel centre.
     pub spp: u32,
     /// The seed of every random sequence.
     pub seed: u64,
@@ -54,67 +61,97 @@ pub struct RenderOutput {
     pub stats: RayStats,
 }
 
-/// Renders `scene` with `integrator`. `progress` is called with the number of pixels of each
-/// finished tile (from worker threads).
+/// Renders every sample of every pixel of `scene` with `integrator`. `progress` is called from
+/// worker threads with the number of samples of each finished tile.
 pub fn render(
     scene: &Scene,
     integrator: &dyn Integrator,
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
-    let (w, h) = (settings.width, settings.height);
-    let tiles_x = w.div_ceil(TILE);
-    let tiles_y = h.div_ceil(TILE);
-    let tiles: Vec<(Vec<Rgb>, RayStats)> = (0..tiles_x * tiles_y)
+    let window = Window::full(settings.width, settings.height);
+    let mut film = Film::new(settings.width, settings.height, window, 3);
+    let stats = render_pass(
+        scene,
+        integrator,
+        settings,
+        &mut film,
+        (0, settings.spp),
+        progress,
+    );
+    RenderOutput {
+        image: film.rgb(0),
+        stats,
+    }
+}
+
+/// Adds samples `first..last` (of the frame's `settings.spp`) of every pixel of the film's
+/// window to `film`. `progress` is called from worker threads with the number of samples of
+/// each finished tile.
+pub fn render_pass(
+    scene: &Scene,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    film: &mut Film,
+    (first, last): (u32, u32),
+    progress: &(dyn Fn(u64) + Sync),
+) -> RayStats {
+    let win = film.window();
+    let tiles_x = win.width().div_ceil(TILE);
+    let tiles_y = win.height().div_ceil(TILE);
+    let tiles: Vec<(Window, Vec<i128>, Vec<u32>, RayStats)> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map(|tile| {
-            let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let x0 = win.x0 + (tile % tiles_x) * TILE;
+            let y0 = win.y0 + (tile / tiles_x) * TILE;
+            let rect = Window {
+                x0,
+                x1: (x0 + TILE).min(win.x1),
+                y0,
+                y1: (y0 + TILE).min(win.y1),
+            };
             let mut stats = RayStats::default();
-            let mut pixels = Vec::with_capacity((x1 - x0) * (y1 - y0));
+            let mut sums = Vec::with_capacity(rect.pixels() * 3);
+            let mut counts = Vec::with_capacity(rect.pixels());
             // One sampler per tile, reset for every pixel (its tables are large).
             let mut sampler = Sampler::new(0, 0);
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    pixels.push(render_pixel(
+            for y in rect.y0..rect.y1 {
+                for x in rect.x0..rect.x1 {
+                    let (sum, n) = render_pixel(
                         scene,
                         integrator,
                         settings,
-                        x,
-                        y,
+                        (x, y),
+                        (first, last),
                         &mut sampler,
                         &mut stats,
-                    ));
+                    );
+                    sums.extend_from_slice(&sum);
+                    counts.push(n);
                 }
             }
-            progress(pixels.len() as u64);
-            (pixels, stats)
+            progress(rect.pixels() as u64 * (last - first) as u64);
+            (rect, sums, counts, stats)
         })
         .collect();
-
-    let mut image = Image::new(w, h);
     let mut stats = RayStats::default();
-    for (tile, (pixels, s)) in tiles.into_iter().enumerate() {
+    for (rect, sums, counts, s) in tiles {
         stats += s;
-        let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-        let tw = (x0 + TILE).min(w) - x0;
-        for (i, p) in pixels.into_iter().enumerate() {
-            image.set(x0 + i % tw, y0 + i / tw, p);
-        }
+        film.add_block(rect, &sums, &counts);
     }
-    RenderOutput { image, stats }
+    stats
 }
 
-/// The mean radiance of the samples of pixel (x, y).
+/// The fixed-point sums of samples `first..last` of pixel (x, y), and how many there are.
 fn render_pixel(
     scene: &Scene,
     integrator: &dyn Integrator,
     settings: &RenderSettings,
-    x: usize,
-    y: usize,
+    (x, y): (usize, usize),
+    (first, last): (u32, u32),
     sampler: &mut Sampler,
     stats: &mut RayStats,
-) -> Rgb {
+) -> ([i128; 3], u32) {
     let (w, h) = (settings.width as f32, settings.height as f32);
     sampler.reset_for_pixel(
         settings.sampler,
@@ -122,16 +159,16 @@ fn render_pixel(
         (y * settings.width + x) as u64,
         settings.spp,
     );
-    let mut sum = [0f64; 3];
+    let mut sum = [0i128; 3];
     // The samples go to the integrator in groups of `BATCH`, traced side by side; each keeps
     // its own place in the pixel's sample sequence.
     let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
     let mut cursors = [sampler.cursor(); BATCH];
     let mut radiance = [Rgb::BLACK; BATCH];
-    for first in (0..settings.spp).step_by(BATCH) {
-        let n = (settings.spp - first).min(BATCH as u32) as usize;
+    for start in (first..last).step_by(BATCH) {
+        let n = (last - start).min(BATCH as u32) as usize;
         for k in 0..n {
-            let [sx, sy] = sampler.pixel_sample(first + k as u32);
+            let [sx, sy] = sampler.pixel_sample(start + k as u32);
             let u = (x as f32 + sx) / w;
             let v = 1.0 - (y as f32 + sy) / h;
             rays[k] = match scene.camera.lens {
@@ -151,20 +188,15 @@ fn render_pixel(
         for l in &radiance[..n] {
             stats.samples += 1;
             if l.is_finite() {
-                sum[0] += l.r as f64;
-                sum[1] += l.g as f64;
-                sum[2] += l.b as f64;
+                sum[0] += to_fixed(l.r);
+                sum[1] += to_fixed(l.g);
+                sum[2] += to_fixed(l.b);
             } else {
                 stats.rejected_samples += 1;
             }
         }
     }
-    let n = settings.spp as f64;
-    Rgb::new(
-        (sum[0] / n) as f32,
-        (sum[1] / n) as f32,
-        (sum[2] / n) as f32,
-    )
+    (sum, last.saturating_sub(first))
 }
 
 #[cfg(test)]
@@ -281,6 +313,49 @@ mod tests {
         assert_eq!(out.image.get(7, 0), Rgb::WHITE);
         assert_eq!(out.stats.rejected_samples, 32);
         let _ = Point3::ORIGIN;
+    }
+
+    /// One uninterrupted render against the same samples split over passes (any boundaries),
+    /// over windows rendered apart and merged, and over thread counts: the same film, bit for
+    /// bit.
+    #[test]
+    fn any_split_of_the_samples_gives_the_same_bits() {
+        let s = scene();
+        let settings = RenderSettings {
+            width: 23,
+            height: 17,
+            spp: 21,
+            seed: 5,
+            ..Default::default()
+        };
+        let full = Window::full(23, 17);
+        // The noise integrator's values are its sample's random numbers: every sample differs.
+        let path = Noise;
+        let mut whole = Film::new(23, 17, full, 3);
+        render_pass(&s, &path, &settings, &mut whole, (0, 21), &|_| {});
+        let mut passes = Film::new(23, 17, full, 3);
+        for range in [(0, 1), (1, 4), (4, 5), (5, 17), (17, 21)] {
+            render_pass(&s, &path, &settings, &mut passes, range, &|_| {});
+        }
+        assert_eq!(passes, whole);
+        let mut merged = Film::new(23, 17, full, 3);
+        for (x0, x1, y0, y1) in [(0, 9, 0, 17), (9, 23, 0, 5), (9, 23, 5, 17)] {
+            let w = Window { x0, x1, y0, y1 };
+            let mut part = Film::new(23, 17, w, 3);
+            render_pass(&s, &path, &settings, &mut part, (0, 10), &|_| {});
+            render_pass(&s, &path, &settings, &mut part, (10, 21), &|_| {});
+            merged.merge(&part).unwrap();
+        }
+        assert_eq!(merged, whole);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let mut threaded = Film::new(23, 17, full, 3);
+        pool.install(|| render_pass(&s, &path, &settings, &mut threaded, (0, 21), &|_| {}));
+        assert_eq!(threaded, whole);
+        assert!(whole.samples() == 23 * 17 * 21);
+        assert!(whole.sums().iter().filter(|&&v| v != 0).count() > 23 * 17 * 2);
     }
 
     #[test]

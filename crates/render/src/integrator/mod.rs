@@ -10,9 +10,9 @@ mod path;
 mod radiosity;
 mod whitted;
 
+pub use course_path::CoursePath;
 pub use debug::{Depth, Flat, Normals, OnOff};
 pub use local::{shade, Local};
-pub use course_path::CoursePath;
 pub use path::Path;
 pub use whitted::Whitted;
 
