@@ -12,6 +12,7 @@ use crate::color::Rgb;
 use crate::interaction::Hit;
 use crate::math::{Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
+use crate::sampling::sampler::ONE_MINUS_EPSILON;
 use crate::sampling::{SampleCursor, Sampler};
 use crate::scene::Scene;
 use crate::stats::RayStats;
@@ -142,13 +143,19 @@ impl Path {
         // The outgoing direction in the shading frame, shared by every BSDF query below.
         let (wo, flip) = bsdf.local_wo(si.wo);
 
-        // Next-event estimation: one light, chosen uniformly.
+        // Next-event estimation: one light, chosen uniformly by the first number of the
+        // light's own pair (rescaled), so that each light keeps a stratified share of the
+        // pixel's samples (a separate number for the choice would give each light a random,
+        // unstratified subset of them).
         let mut shadow = None;
         if !bsdf.is_delta() && light_pick > 0.0 {
-            let n = scene.lights.len() as u32;
-            let pick = if n == 1 { 0 } else { sampler.next_index(n) };
-            let u = sampler.next_2d();
-            let light = &scene.lights[pick as usize];
+            let n = scene.lights.len();
+            let mut u = sampler.next_2d();
+            let pick = ((u[0] * n as f32) as usize).min(n - 1);
+            if n > 1 {
+                u[0] = (u[0] * n as f32 - pick as f32).min(ONE_MINUS_EPSILON);
+            }
+            let light = &scene.lights[pick];
             if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u) {
                 let wi = bsdf.local_wi(ls.wi, flip);
                 let f = bsdf.eval_local(wo, wi);
@@ -167,7 +174,6 @@ impl Path {
             }
         } else if !bsdf.is_delta() {
             // Keep the sample stream aligned whether or not lights exist.
-            sampler.next_1d();
             sampler.next_2d();
         }
 
