@@ -21,6 +21,8 @@ pub enum Command {
     Render(SceneArgs),
     /// Convert an image between PFM, OpenEXR and PNG (tone mapping for PNG).
     Convert(ConvertArgs),
+    /// Merge partial renders (`render --partial`) and checkpoints into the image of the frame.
+    Merge(MergeArgs),
 }
 
 /// `render`: a scene file and how to render it.
@@ -87,9 +89,44 @@ pub struct RenderArgs {
     /// Print rays traced, time and Mrays/s.
     #[arg(long)]
     pub stats: bool,
-    /// No progress bar.
+    /// No progress bar (the same as `--progress none`).
     #[arg(long, short = 'q')]
     pub quiet: bool,
+    /// How progress is shown on stderr: bar (default), json (one JSON object per line, for
+    /// schedulers and wrappers), none.
+    #[arg(long, value_name = "HOW")]
+    pub progress: Option<String>,
+    /// Render only sample indices A ≤ i < B of every pixel of the --spp frame (A..B).
+    #[arg(long, value_name = "A..B", value_parser = sample_range)]
+    pub samples: Option<(u32, u32)>,
+    /// Render only the pixels X0 ≤ x < X1, Y0 ≤ y < Y1 (row 0 at the top).
+    #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = crop_window)]
+    pub crop: Option<[u32; 4]>,
+    /// Write only this partial file (sums, counts, scene hash and settings) for `candela merge`.
+    #[arg(long, value_name = "FILE")]
+    pub partial: Option<PathBuf>,
+    /// Save progress to FILE (a partial file) every --checkpoint-every seconds, on SIGINT and
+    /// SIGTERM, and at the end.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = positive_f64)]
+    pub checkpoint_every: f64,
+    /// Continue the render saved in this checkpoint (and keep checkpointing to it unless
+    /// --checkpoint names another file).
+    #[arg(long, value_name = "FILE")]
+    pub resume: Option<PathBuf>,
+    /// Render whole sample passes until this many seconds have passed, then write the image of
+    /// the samples done and a checkpoint to resume from.
+    #[arg(long, value_name = "SECONDS", value_parser = positive_f64)]
+    pub time_limit: Option<f64>,
+    /// Render frames A ≤ f < B of an animation: the float --frame-var is set to f (as by -d)
+    /// and `%d` / `%04d` in output, partial and checkpoint names becomes the frame number.
+    #[arg(long, value_name = "A..B", value_parser = frame_range)]
+    pub frames: Option<(u32, u32)>,
+    /// The variable --frames sets to the frame number.
+    #[arg(long, value_name = "NAME", default_value = "clock")]
+    pub frame_var: String,
     /// How LDR outputs are tone mapped.
     #[command(flatten)]
     pub tone: ToneArgs,
@@ -113,6 +150,24 @@ pub struct ToneArgs {
     pub srgb: bool,
 }
 
+/// `merge`: partial renders into an image.
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// The partial files (from `render --partial` or `--checkpoint`).
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// Output file, repeatable: an image (.png, .pfm, .exr, .hdr) or, with any other extension,
+    /// the merged partial file.
+    #[arg(short = 'o', long = "output", value_name = "FILE", required = true)]
+    pub outputs: Vec<PathBuf>,
+    /// Write the image even when samples are missing (each pixel the mean of what it has).
+    #[arg(long)]
+    pub allow_incomplete: bool,
+    /// How LDR outputs are tone mapped (gamma 2.2 unless --gamma, as for `render`).
+    #[command(flatten)]
+    pub tone: ToneArgs,
+}
+
 /// `convert`: an input and an output image.
 #[derive(Args, Debug)]
 pub struct ConvertArgs {
@@ -129,6 +184,67 @@ pub struct ConvertArgs {
 pub const MAX_SIZE: i64 = 1 << 15;
 /// Largest accepted sample count per pixel.
 pub const MAX_SPP: i64 = 1 << 20;
+
+fn positive_f64(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        Ok(_) => Err(format!("'{s}' must be a positive finite number")),
+        Err(_) => Err(format!("'{s}' is not a number")),
+    }
+}
+
+/// `A..B` with A < B.
+fn range(s: &str) -> Result<(u32, u32), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("'{s}' is not a range A..B"))?;
+    let num = |x: &str| {
+        x.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{x}' in '{s}' is not a whole number"))
+    };
+    let (a, b) = (num(a)?, num(b)?);
+    if a >= b {
+        return Err(format!("'{s}': the range is empty (A must be less than B)"));
+    }
+    Ok((a, b))
+}
+
+fn sample_range(s: &str) -> Result<(u32, u32), String> {
+    let r = range(s)?;
+    if r.1 as i64 > MAX_SPP {
+        return Err(format!("'{s}': sample indices go up to {MAX_SPP}"));
+    }
+    Ok(r)
+}
+
+fn frame_range(s: &str) -> Result<(u32, u32), String> {
+    let r = range(s)?;
+    if r.1 - r.0 > MAX_FRAMES {
+        return Err(format!("'{s}': at most {MAX_FRAMES} frames per run"));
+    }
+    Ok(r)
+}
+
+/// Largest number of frames one `--frames` run renders.
+pub const MAX_FRAMES: u32 = 1 << 20;
+
+fn crop_window(s: &str) -> Result<[u32; 4], String> {
+    let n: Vec<&str> = s.split(',').collect();
+    let [x0, x1, y0, y1] = n[..] else {
+        return Err(format!("'{s}' is not X0,X1,Y0,Y1"));
+    };
+    let num = |x: &str| {
+        x.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{x}' in '{s}' is not a whole number"))
+    };
+    let c = [num(x0)?, num(x1)?, num(y0)?, num(y1)?];
+    if c[0] >= c[1] || c[2] >= c[3] {
+        return Err(format!("'{s}': the window is empty (X0 < X1 and Y0 < Y1)"));
+    }
+    Ok(c)
+}
 
 fn positive_f32(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {

@@ -5,7 +5,13 @@
 
 mod args;
 mod convert;
+mod frames;
+mod identity;
+mod merge;
+mod parts;
+mod progress;
 mod run;
+mod session;
 
 use clap::Parser;
 use std::process::ExitCode;
@@ -16,9 +22,14 @@ fn main() -> ExitCode {
         args::Command::Demo(a) => run::demo(a),
         args::Command::Render(a) => run::render(a),
         args::Command::Convert(a) => convert::run(a),
+        args::Command::Merge(a) => merge::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<session::Interrupted>() => {
+            eprintln!("candela: {e}");
+            ExitCode::from(session::EXIT_INTERRUPTED as u8)
+        }
         Err(e) => {
             eprintln!("candela: error: {e:#}");
             ExitCode::FAILURE

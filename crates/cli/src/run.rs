@@ -1,38 +1,104 @@
 //! `candela demo` and `candela render`: load, validate options, render, write.
 
 use crate::args::{RenderArgs, SceneArgs, ToneArgs};
+use crate::frames;
+use crate::identity;
+use crate::parts;
+use crate::progress::{json_string, Progress, ProgressMode};
+use crate::session::{self, run_passes, Ending, Interrupted, Job, Plan};
 use anyhow::{bail, Context, Result};
+use candela_imageio::partial::{encode_partial, Partial, PartialMeta};
 use candela_imageio::{write_atomically, Encoding, ToneMap};
 use candela_render::accel::AccelKind;
+use candela_render::film::{Film, Window};
 use candela_render::integrator::{IntegratorKind, IntegratorSettings};
 use candela_render::radiosity::{
     CacheStatus, FormFactorMethod, RadiosityOptions, RadiosityOutcome, SolverKind,
 };
-use candela_render::render::{render as render_image, RenderSettings};
+use candela_render::render::RenderSettings;
 use candela_render::sampling::SamplerKind;
+use candela_render::Image;
 use candela_scene::{LoadOptions, LoadedScene};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// `candela demo`.
 pub fn demo(args: RenderArgs) -> Result<()> {
-    let outputs = outputs(&args, Path::new("demo.png"))?;
-    let opts = load_options(&args)?;
-    let start = Instant::now();
-    let loaded = candela_scene::demo_scene(&opts).map_err(|e| anyhow::anyhow!("{e}"))?;
-    render_and_write(loaded, &args, &outputs, start.elapsed().as_secs_f64())
+    run_frames(None, &args)
 }
 
 /// `candela render SCENE`.
 pub fn render(a: SceneArgs) -> Result<()> {
-    let default_out = PathBuf::from(a.scene.file_stem().unwrap_or_default()).with_extension("png");
-    let outputs = outputs(&a.render, &default_out)?;
-    let opts = load_options(&a.render)?;
-    // Scene errors carry their own `file:line:col`; print them as they are.
-    let start = Instant::now();
-    let loaded = candela_scene::load_scene(&a.scene, &opts).map_err(|e| anyhow::anyhow!("{e}"))?;
-    render_and_write(loaded, &a.render, &outputs, start.elapsed().as_secs_f64())
+    run_frames(Some(&a.scene), &a.render)
+}
+
+/// Renders each frame of `--frames` (or the one frame) of the scene (the demo for `None`).
+fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
+    let default_out = match scene {
+        Some(s) => PathBuf::from(s.file_stem().unwrap_or_default()).with_extension("png"),
+        None => PathBuf::from("demo.png"),
+    };
+    let outputs = outputs(args, &default_out)?;
+    let base_opts = load_options(args)?;
+    let mode = ProgressMode::from_args(args.progress.as_deref(), args.quiet)?;
+    let frames: Vec<Option<u32>> = match args.frames {
+        Some((a, b)) => (a..b).map(Some).collect(),
+        None => vec![None],
+    };
+    if frames.len() > 1 {
+        let named = outputs
+            .iter()
+            .chain(&args.partial)
+            .chain(&args.checkpoint)
+            .chain(&args.resume);
+        for p in named {
+            if !frames::has_number(p) {
+                bail!(
+                    "--frames: '{}' has no %d (or %04d) for the frame number, so every frame would overwrite it",
+                    p.display()
+                );
+            }
+        }
+    }
+    session::catch_signals();
+    for frame in frames {
+        let mut opts = base_opts.clone();
+        let paths = FramePaths {
+            outputs: outputs.iter().map(|p| frames::name(p, frame)).collect(),
+            partial: args.partial.as_deref().map(|p| frames::name(p, frame)),
+            checkpoint: args.checkpoint.as_deref().map(|p| frames::name(p, frame)),
+            resume: args.resume.as_deref().map(|p| frames::name(p, frame)),
+        };
+        if let Some(f) = frame {
+            opts.defines.push((args.frame_var.clone(), f.to_string()));
+        }
+        let start = Instant::now();
+        let loaded = match scene {
+            Some(path) => candela_scene::load_scene(path, &opts),
+            None => candela_scene::demo_scene(&opts),
+        }
+        // Scene errors carry their own `file:line:col`; print them as they are.
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let load_seconds = start.elapsed().as_secs_f64();
+        render_frame(
+            loaded,
+            args,
+            &opts.defines,
+            &paths,
+            frame,
+            mode,
+            load_seconds,
+        )?;
+    }
+    Ok(())
+}
+
+/// The files one frame reads and writes (`%d` already replaced).
+struct FramePaths {
+    outputs: Vec<PathBuf>,
+    partial: Option<PathBuf>,
+    checkpoint: Option<PathBuf>,
+    resume: Option<PathBuf>,
 }
 
 /// The output files, checked before any work so that a bad extension costs nothing.
@@ -176,12 +242,15 @@ fn radiosity_outcome(outcome: &RadiosityOutcome, args: &RenderArgs) -> Result<()
 }
 
 /// The display gamma of rendered LDR images unless `--gamma` says otherwise.
-const RENDER_GAMMA: f32 = 2.2;
+pub const RENDER_GAMMA: f32 = 2.2;
 
-fn render_and_write(
+fn render_frame(
     loaded: LoadedScene,
     args: &RenderArgs,
-    outputs: &[PathBuf],
+    defines: &[(String, String)],
+    paths: &FramePaths,
+    frame: Option<u32>,
+    mode: ProgressMode,
     load_seconds: f64,
 ) -> Result<()> {
     for w in &loaded.warnings {
@@ -206,6 +275,90 @@ fn render_and_write(
         hide_emitters: hints.hide_emitters,
         radiosity: radiosity_options(args, kind)?,
     };
+    let settings = RenderSettings {
+        width: args.width.or(hints.width).unwrap_or(640) as usize,
+        height: args.height.or(hints.height).unwrap_or(480) as usize,
+        spp: args.spp.or(hints.spp).unwrap_or(1),
+        seed: args.seed,
+        sampler: sampler_kind(args)?,
+    };
+    // What this job renders: a window of the frame and a range of sample indices.
+    let window = match args.crop {
+        None => Window::full(settings.width, settings.height),
+        Some([x0, x1, y0, y1]) => {
+            let w = Window {
+                x0: x0 as usize,
+                x1: x1 as usize,
+                y0: y0 as usize,
+                y1: y1 as usize,
+            };
+            if !w.fits(settings.width, settings.height) {
+                bail!(
+                    "--crop {x0},{x1},{y0},{y1}: the window does not fit the {}×{} image",
+                    settings.width,
+                    settings.height
+                );
+            }
+            w
+        }
+    };
+    let target = args.samples.unwrap_or((0, settings.spp));
+    if target.1 > settings.spp {
+        bail!(
+            "--samples {}..{}: the frame has only {} samples per pixel (--spp)",
+            target.0,
+            target.1,
+            settings.spp
+        );
+    }
+    // A time limit without a checkpoint file saves beside the first output.
+    let checkpoint = paths
+        .checkpoint
+        .clone()
+        .or(paths.resume.clone())
+        .or_else(|| {
+            args.time_limit.map(|_| {
+                let first = paths.partial.as_ref().unwrap_or(&paths.outputs[0]);
+                let mut name = first.clone().into_os_string();
+                name.push(".checkpoint");
+                PathBuf::from(name)
+            })
+        });
+    let needs_identity = paths.partial.is_some() || checkpoint.is_some();
+    let meta = if needs_identity {
+        let scene = identity::scene_hash(&loaded.inputs, candela_scene::DEMO_SCENE)
+            .context("hashing the scene's files")?;
+        Some(PartialMeta {
+            spp: settings.spp,
+            samples: (target.0, target.0),
+            target,
+            scene,
+            settings: identity::pixel_settings(
+                args,
+                defines,
+                &settings,
+                kind,
+                &integrator_settings,
+            ),
+        })
+    } else {
+        None
+    };
+    let mut film = Film::new(settings.width, settings.height, window, 3);
+    let mut first = target.0;
+    if let Some(path) = &paths.resume {
+        let part = parts::read_part(path)?;
+        let meta = meta.as_ref().expect("resuming needs the identity");
+        if let Err(why) = parts::same_job(&part, meta, &film) {
+            bail!(
+                "--resume '{}': the checkpoint is of another render ({why})",
+                path.display()
+            );
+        }
+        first = part.meta.samples.1;
+        film = part.film;
+    }
+
     if matches!(kind, IntegratorKind::Path | IntegratorKind::Radiosity) {
         for place in &loaded.local_model_terms {
             eprintln!("candela: warning: {place} is a term of the local model, ignored by the {name} integrator");
@@ -218,57 +371,122 @@ fn render_and_write(
         radiosity_outcome(outcome, args)?;
     }
     let integrator = built.integrator;
-
-    let settings = RenderSettings {
-        width: args.width.or(hints.width).unwrap_or(640) as usize,
-        height: args.height.or(hints.height).unwrap_or(480) as usize,
-        spp: args.spp.or(hints.spp).unwrap_or(1),
-        seed: args.seed,
-        sampler: sampler_kind(args)?,
-    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)
         .build()
         .context("--threads: cannot start the worker threads")?;
 
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        let b = ProgressBar::new((settings.width * settings.height) as u64 * settings.spp as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {percent}% ETA {eta}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        b
+    let per_sample = window.pixels() as u64;
+    let progress = Progress::new(
+        mode,
+        per_sample * (target.1 - target.0) as u64,
+        per_sample * (first - target.0) as u64,
+        frame,
+    );
+    let save_partial = |path: &Path, film: &Film, done: u32| -> Result<()> {
+        let meta = meta.as_ref().expect("partial files need the identity");
+        let part = Partial {
+            meta: PartialMeta {
+                samples: (target.0, done),
+                ..meta.clone()
+            },
+            film: film.clone(),
+        };
+        write_atomically(path, &encode_partial(&part))
+            .with_context(|| format!("cannot write '{}'", path.display()))
+    };
+    let mut save_checkpoint = |film: &Film, done: u32| -> Result<()> {
+        if let Some(path) = &checkpoint {
+            save_partial(path, film, done)?;
+            progress.event(
+                "checkpoint",
+                &format!(
+                    ",\"file\":{},\"samples\":[{},{done}]",
+                    json_string(&path.to_string_lossy()),
+                    target.0
+                ),
+            );
+        }
+        Ok(())
+    };
+    let plan = Plan {
+        checkpoint_every: checkpoint.as_ref().map(|_| args.checkpoint_every),
+        time_limit: args.time_limit,
+    };
+    let job = Job {
+        scene: &loaded.scene,
+        integrator: integrator.as_ref(),
+        settings: &settings,
     };
     let start = Instant::now();
-    let out = pool.install(|| {
-        render_image(&loaded.scene, integrator.as_ref(), &settings, &|n| {
-            bar.inc(n)
-        })
-    });
+    let (ending, done, stats) = pool.install(|| {
+        run_passes(
+            job,
+            &mut film,
+            (first, target.1),
+            plan,
+            &progress,
+            &mut save_checkpoint,
+        )
+    })?;
     let seconds = start.elapsed().as_secs_f64();
-    bar.finish_and_clear();
+    progress.finish();
 
-    let tone = tone_map(&args.tone, RENDER_GAMMA);
-    for path in outputs {
-        candela_imageio::write_image(path, &out.image, &tone)
-            .with_context(|| format!("writing '{}'", path.display()))?;
+    let held = format!("samples {}..{done} of {}..{}", target.0, target.0, target.1);
+    match ending {
+        Ending::Interrupted => {
+            let saved = match &checkpoint {
+                Some(path) => {
+                    save_checkpoint(&film, done)?;
+                    format!(
+                        "{held} saved in '{}' (continue with --resume)",
+                        path.display()
+                    )
+                }
+                None => format!("{held} done, not saved (--checkpoint FILE keeps them)"),
+            };
+            return Err(Interrupted(format!("interrupted: {saved}")).into());
+        }
+        Ending::TimeUp => {
+            save_checkpoint(&film, done)?;
+            progress.message(&format!(
+                "time limit reached: {held}; continue with --resume '{}'",
+                checkpoint
+                    .as_ref()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default()
+            ));
+        }
+        Ending::Complete => {
+            if paths.checkpoint.is_some() || paths.resume.is_some() {
+                save_checkpoint(&film, done)?;
+            }
+        }
     }
+
+    if let Some(path) = &paths.partial {
+        save_partial(path, &film, done)?;
+    } else {
+        let image = crop(&film.rgb(0), window);
+        let tone = tone_map(&args.tone, RENDER_GAMMA);
+        for path in &paths.outputs {
+            candela_imageio::write_image(path, &image, &tone)
+                .with_context(|| format!("writing '{}'", path.display()))?;
+        }
+    }
+    progress.event("done", "");
     if args.stats {
         eprintln!("scene loaded and built in {load_seconds:.3} s");
         if let Some((triangles, bytes)) = loaded.mesh_stats {
             eprintln!("meshes: {triangles} triangles, {bytes:.1} bytes per triangle");
         }
-        let s = &out.stats;
+        let s = &stats;
         let rays = s.total_rays();
         eprintln!(
             "{}x{} at {} spp with {} ({} threads): {:.3} s, {} rays ({} camera/bounce + {} shadow), {:.3} Mrays/s, {:.3} Msamples/s, {:.1} nodes and {:.1} primitive tests per ray, {} samples rejected (NaN/Inf)",
-            settings.width,
-            settings.height,
-            settings.spp,
+            window.width(),
+            window.height(),
+            done - first,
             name,
             pool.current_num_threads(),
             seconds,
@@ -283,4 +501,18 @@ fn render_and_write(
         );
     }
     Ok(())
+}
+
+/// The pixels of `window` of a frame-sized image (the image itself for the whole frame).
+fn crop(image: &Image, window: Window) -> Image {
+    if window == Window::full(image.width(), image.height()) {
+        return image.clone();
+    }
+    let mut out = Image::new(window.width(), window.height());
+    for y in window.y0..window.y1 {
+        for x in window.x0..window.x1 {
+            out.set(x - window.x0, y - window.y0, image.get(x, y));
+        }
+    }
+    out
 }

@@ -14,6 +14,7 @@ pub mod atomic;
 pub mod error;
 pub mod exr;
 pub mod hdr;
+pub mod partial;
 pub mod pfm;
 pub mod png;
 pub mod tonemap;

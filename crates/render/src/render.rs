@@ -21,6 +21,7 @@ use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::stats::RayStats;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Edge of the square tiles, in pixels.
 pub const TILE: usize = 16;
@@ -93,15 +94,38 @@ pub fn render_pass(
     integrator: &dyn Integrator,
     settings: &RenderSettings,
     film: &mut Film,
-    (first, last): (u32, u32),
+    samples: (u32, u32),
     progress: &(dyn Fn(u64) + Sync),
 ) -> RayStats {
+    let never = AtomicBool::new(false);
+    render_pass_or_cancel(scene, integrator, settings, film, samples, progress, &never)
+        .unwrap_or_default()
+}
+
+/// A finished tile: its pixels, their fixed-point sums and counts, and its counters.
+type TileSums = (Window, Vec<i128>, Vec<u32>, RayStats);
+
+/// [`render_pass`] that gives up when `cancel` becomes true: tiles not yet started are skipped
+/// and, if any was, the film is left as it was and `None` is returned (a pass is added whole or
+/// not at all, so the film always holds the same samples in every pixel).
+pub fn render_pass_or_cancel(
+    scene: &Scene,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    film: &mut Film,
+    (first, last): (u32, u32),
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Option<RayStats> {
     let win = film.window();
     let tiles_x = win.width().div_ceil(TILE);
     let tiles_y = win.height().div_ceil(TILE);
-    let tiles: Vec<(Window, Vec<i128>, Vec<u32>, RayStats)> = (0..tiles_x * tiles_y)
+    let tiles: Option<Vec<TileSums>> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map(|tile| {
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
             let x0 = win.x0 + (tile % tiles_x) * TILE;
             let y0 = win.y0 + (tile / tiles_x) * TILE;
             let rect = Window {
@@ -131,15 +155,15 @@ pub fn render_pass(
                 }
             }
             progress(rect.pixels() as u64 * (last - first) as u64);
-            (rect, sums, counts, stats)
+            Some((rect, sums, counts, stats))
         })
         .collect();
     let mut stats = RayStats::default();
-    for (rect, sums, counts, s) in tiles {
+    for (rect, sums, counts, s) in tiles? {
         stats += s;
         film.add_block(rect, &sums, &counts);
     }
-    stats
+    Some(stats)
 }
 
 /// The fixed-point sums of samples `first..last` of pixel (x, y), and how many there are.
@@ -356,6 +380,47 @@ mod tests {
         assert_eq!(threaded, whole);
         assert!(whole.samples() == 23 * 17 * 21);
         assert!(whole.sums().iter().filter(|&&v| v != 0).count() > 23 * 17 * 2);
+    }
+
+    #[test]
+    fn a_cancelled_pass_leaves_the_film_as_it_was() {
+        let s = scene();
+        let settings = RenderSettings {
+            width: 40,
+            height: 40,
+            spp: 8,
+            ..Default::default()
+        };
+        let mut film = Film::new(40, 40, Window::full(40, 40), 3);
+        render_pass(&s, &Noise, &settings, &mut film, (0, 4), &|_| {});
+        let before = film.clone();
+        // Cancelled before it starts, and in the middle (after the first tile).
+        let cancel = AtomicBool::new(true);
+        let r = render_pass_or_cancel(&s, &Noise, &settings, &mut film, (4, 8), &|_| {}, &cancel);
+        assert!(r.is_none());
+        assert_eq!(film, before);
+        let cancel = AtomicBool::new(false);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let r = pool.install(|| {
+            render_pass_or_cancel(
+                &s,
+                &Noise,
+                &settings,
+                &mut film,
+                (4, 8),
+                &|_| cancel.store(true, Ordering::Relaxed),
+                &cancel,
+            )
+        });
+        assert!(r.is_none());
+        assert_eq!(film, before);
+        let never = AtomicBool::new(false);
+        let r = render_pass_or_cancel(&s, &Noise, &settings, &mut film, (4, 8), &|_| {}, &never);
+        assert!(r.is_some());
+        assert_eq!(film.samples(), 40 * 40 * 8);
     }
 
     #[test]

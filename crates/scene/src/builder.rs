@@ -98,6 +98,7 @@ impl Builder<'_> {
                 let image = match self.images.get(&file.path) {
                     Some(i) => i.clone(),
                     None => {
+                        crate::inputs::record(&file.path);
                         let img = candela_imageio::read_image(&file.path).map_err(|e| {
                             self.err(file.pos, format!("cannot load image '{}': {e}", file.name))
                         })?;

@@ -7,9 +7,11 @@
 //! - [`mitsuba`]: Mitsuba 3 XML import.
 //! - [`loaded`]: what loading needs and produces, shared by both formats.
 //! - [`load`]: loading either format, and the built-in demo scene.
+//! - `inputs`: the files a load reads (for the scene hash of partial renders).
 
 pub mod builder;
 pub mod error;
+mod inputs;
 pub mod lang;
 pub mod load;
 pub mod loaded;

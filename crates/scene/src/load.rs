@@ -10,6 +10,14 @@ use std::path::Path;
 /// Loads a scene file: Mitsuba 3 XML when the extension is `.xml`, the candela language
 /// otherwise.
 pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    let (loaded, inputs) = crate::inputs::collecting(|| load_scene_file(path, opts));
+    let mut loaded = loaded?;
+    loaded.inputs = inputs;
+    Ok(loaded)
+}
+
+fn load_scene_file(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    crate::inputs::record(path);
     let text = std::fs::read_to_string(path)
         .map_err(|e| SceneError::new(path, format!("cannot read the scene file: {e}")))?;
     let is_xml = path
@@ -60,6 +68,7 @@ fn load_candela(
         warnings: report.warnings,
         mesh_stats: report.bytes_per_triangle.map(|b| (report.triangles, b)),
         local_model_terms: report.local_model_terms,
+        inputs: Vec::new(),
     })
 }
 

@@ -3,6 +3,7 @@
 
 use candela_render::accel::AccelKind;
 use candela_render::Scene;
+use std::path::PathBuf;
 
 /// What loading needs from the command line.
 #[derive(Clone, Debug, Default)]
@@ -48,4 +49,6 @@ pub struct LoadedScene {
     /// Where the scene uses terms of the local model only (ambient light, per-light components),
     /// which the physically based integrators ignore.
     pub local_model_terms: Vec<String>,
+    /// The files the load read, the scene file first (empty for the built-in demo).
+    pub inputs: Vec<PathBuf>,
 }

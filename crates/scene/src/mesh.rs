@@ -15,6 +15,7 @@ use std::path::Path;
 /// Loads `path` (`.obj` or `.ply`, case-insensitive) and moves it by `transform`.
 /// The error is a message for the user (the caller adds the position).
 pub fn load_mesh(path: &Path, transform: &Transform) -> Result<Mesh, String> {
+    crate::inputs::record(path);
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

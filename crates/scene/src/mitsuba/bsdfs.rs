@@ -346,6 +346,7 @@ impl<'t> Loader<'t> {
         if let Some(i) = self.images.get(&(path.clone(), raw)) {
             return Ok(i.clone());
         }
+        crate::inputs::record(&path);
         let mut img = candela_imageio::read_image(&path)
             .map_err(|e| self.err(pos, format!("cannot load image '{name}': {e}")))?;
         if img.width() == 0 || img.height() == 0 {

@@ -148,6 +148,7 @@ pub fn load_mitsuba(
         warnings,
         mesh_stats: (triangles > 0).then(|| (triangles, mesh_bytes / triangles as f64)),
         local_model_terms: Vec::new(),
+        inputs: Vec::new(),
     })
 }
 

@@ -1,0 +1,169 @@
+//! The render loop of whole sample passes: every pass adds the same samples to every pixel of
+//! the film, so after each one the film is a complete, smaller render. Between passes it saves
+//! checkpoints, stops at a time limit, and gives up cleanly on SIGINT/SIGTERM (the pass in
+//! flight is dropped, the film keeps every finished pass).
+
+use crate::progress::Progress;
+use anyhow::Result;
+use candela_render::film::Film;
+use candela_render::integrator::Integrator;
+use candela_render::render::{render_pass_or_cancel, RenderSettings};
+use candela_render::stats::RayStats;
+use candela_render::Scene;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::time::Instant;
+
+/// Set by SIGINT and SIGTERM.
+pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Makes SIGINT and SIGTERM set [`INTERRUPTED`] (a second one ends the process at once).
+pub fn catch_signals() {
+    static SIGNALS: AtomicU32 = AtomicU32::new(0);
+    // Only the first call of a process installs the handler; later calls fail harmlessly.
+    let _ = ctrlc::set_handler(|| {
+        INTERRUPTED.store(true, Ordering::SeqCst);
+        if SIGNALS.fetch_add(1, Ordering::SeqCst) > 0 {
+            std::process::exit(EXIT_INTERRUPTED);
+        }
+    });
+}
+
+/// The exit status of an interrupted render (128 + SIGINT, as shells report it).
+pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// The error of an interrupted render (its message says what was saved).
+#[derive(Debug)]
+pub struct Interrupted(pub String);
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+/// When to stop early and when to save.
+#[derive(Clone, Copy, Debug)]
+pub struct Plan {
+    /// Save a checkpoint at least this often (seconds), if any.
+    pub checkpoint_every: Option<f64>,
+    /// Stop starting passes once this many seconds have passed, if any.
+    pub time_limit: Option<f64>,
+}
+
+/// How the loop ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ending {
+    /// Every sample of the range is in the film.
+    Complete,
+    /// The time limit came first.
+    TimeUp,
+    /// SIGINT or SIGTERM came first.
+    Interrupted,
+}
+
+/// The longest a pass should take when progress matters (checkpoints, time limits), so that
+/// an interruption loses little.
+const LONGEST_PASS: f64 = 30.0;
+/// The most samples a pass takes.
+const MOST_SAMPLES: u32 = 64;
+
+/// What a frame is rendered from.
+#[derive(Clone, Copy)]
+pub struct Job<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The integrator.
+    pub integrator: &'a dyn Integrator,
+    /// Image size, spp, seed, sampler.
+    pub settings: &'a RenderSettings,
+}
+
+/// Renders samples `first..last` into `film` in passes, calling `save(film, done)` for
+/// checkpoints (every `plan.checkpoint_every` seconds). Returns how it ended, the first sample
+/// index not yet in the film, and the counters of the passes.
+pub fn run_passes(
+    job: Job<'_>,
+    film: &mut Film,
+    (first, last): (u32, u32),
+    plan: Plan,
+    progress: &Progress,
+    save: &mut dyn FnMut(&Film, u32) -> Result<()>,
+) -> Result<(Ending, u32, RayStats)> {
+    let start = Instant::now();
+    let mut last_save = (Instant::now(), first);
+    let mut stats = RayStats::default();
+    let mut done = first;
+    let stepwise = plan.checkpoint_every.is_some() || plan.time_limit.is_some();
+    // Seconds per sample of every pixel, from the last pass.
+    let mut per_sample: Option<f64> = None;
+    while done < last {
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            return Ok((Ending::Interrupted, done, stats));
+        }
+        let mut n = last - done;
+        if stepwise {
+            // A soft length (passes of whole batches of 16 samples trace fastest, so a pass
+            // takes 16 when they fit in a hard length, but no more than the soft one allows).
+            let mut soft = LONGEST_PASS;
+            let mut hard = f64::INFINITY;
+            if let Some(every) = plan.checkpoint_every {
+                soft = soft.min(every / 2.0);
+                hard = hard.min(every);
+            }
+            if let Some(limit) = plan.time_limit {
+                let left = limit - start.elapsed().as_secs_f64();
+                // One pass always runs, so that a time-limited render has an image.
+                if done > first && per_sample.is_some_and(|t| t > left) {
+                    return Ok((Ending::TimeUp, done, stats));
+                }
+                soft = soft.min(left);
+                hard = hard.min(left);
+            }
+            n = match per_sample {
+                None => 1,
+                Some(t) => {
+                    let fit =
+                        |secs: f64| (secs / t.max(1e-9)).floor().min(MOST_SAMPLES as f64) as u32;
+                    let mut k = fit(soft);
+                    if k < 16 {
+                        k = fit(hard).min(16);
+                    }
+                    if k >= 16 {
+                        k = k / 16 * 16;
+                    }
+                    k.max(1)
+                }
+            }
+            .min(last - done);
+            // Save before a pass that would end more than one interval after the last save,
+            // so that a kill loses at most about one interval.
+            if let (Some(every), Some(t)) = (plan.checkpoint_every, per_sample) {
+                let since = last_save.0.elapsed().as_secs_f64();
+                if done > last_save.1 && since + t * n as f64 > every {
+                    save(film, done)?;
+                    last_save = (Instant::now(), done);
+                }
+            }
+        }
+        let t0 = Instant::now();
+        let pass = render_pass_or_cancel(
+            job.scene,
+            job.integrator,
+            job.settings,
+            film,
+            (done, done + n),
+            &|k| progress.add(k),
+            &INTERRUPTED,
+        );
+        let Some(s) = pass else {
+            return Ok((Ending::Interrupted, done, stats));
+        };
+        per_sample = Some(t0.elapsed().as_secs_f64() / n as f64);
+        done += n;
+        stats += s;
+        progress.pass_done(&s);
+    }
+    Ok((Ending::Complete, done, stats))
+}
