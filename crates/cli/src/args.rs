@@ -21,6 +21,9 @@ pub enum Command {
     Render(SceneArgs),
     /// Convert an image between PFM, OpenEXR and PNG (tone mapping for PNG).
     Convert(ConvertArgs),
+    /// Denoise a rendered image with Intel Open Image Denoise (using its albedo and normal
+    /// layers when it has them).
+    Denoise(DenoiseArgs),
     /// Merge partial renders (`render --partial`) and checkpoints into the image of the frame.
     Merge(MergeArgs),
 }
@@ -127,6 +130,18 @@ pub struct RenderArgs {
     /// The variable --frames sets to the frame number.
     #[arg(long, value_name = "NAME", default_value = "clock")]
     pub frame_var: String,
+    /// Output variables besides radiance, comma-separated: albedo, normal, depth, position,
+    /// uv, shape (OpenEXR layers, or NAME.VARIABLE.pfm files beside other outputs).
+    #[arg(long, value_name = "LIST")]
+    pub aov: Option<String>,
+    /// Denoise the image with Intel Open Image Denoise (loaded at run time from OIDN_DIR or
+    /// the system) using albedo and normal auxiliaries; the noisy image is kept as
+    /// NAME.noisy.EXT.
+    #[arg(long)]
+    pub denoise: bool,
+    /// With --denoise: do not keep the noisy image.
+    #[arg(long)]
+    pub no_keep_noisy: bool,
     /// How LDR outputs are tone mapped.
     #[command(flatten)]
     pub tone: ToneArgs,
@@ -148,6 +163,19 @@ pub struct ToneArgs {
     /// Tone mapping: encode with the sRGB curve instead of the gamma power.
     #[arg(long)]
     pub srgb: bool,
+}
+
+/// `denoise`: an image in, a denoised image out.
+#[derive(Args, Debug)]
+pub struct DenoiseArgs {
+    /// The noisy image (.exr with optional albedo.R/G/B and normal.X/Y/Z layers, .pfm, .hdr).
+    pub input: PathBuf,
+    /// The denoised image (.exr, .pfm, .hdr, .png).
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: PathBuf,
+    /// How an LDR output is tone mapped (gamma 2.2 unless --gamma).
+    #[command(flatten)]
+    pub tone: ToneArgs,
 }
 
 /// `merge`: partial renders into an image.

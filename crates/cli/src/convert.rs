@@ -13,7 +13,7 @@ pub fn run(a: ConvertArgs) -> Result<()> {
     }
     let img = candela_imageio::read_image(&a.input)
         .with_context(|| format!("reading '{}'", a.input.display()))?;
-    candela_imageio::write_image(&a.output, &img, &crate::run::tone_map(&a.tone, 1.0))
+    candela_imageio::write_image(&a.output, &img, &crate::images::tone_map(&a.tone, 1.0))
         .with_context(|| format!("writing '{}'", a.output.display()))?;
     Ok(())
 }

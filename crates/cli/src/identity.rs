@@ -59,6 +59,8 @@ pub fn pixel_settings(
             args.accel.clone().unwrap_or_else(|| "default".into()),
         ),
     ];
+    let aovs: Vec<&str> = settings.aovs.iter().map(|a| a.name()).collect();
+    s.push(("aovs".to_string(), aovs.join(",")));
     let defines: Vec<String> = defines.iter().map(|(k, v)| format!("{k}={v}")).collect();
     s.push(("defines".to_string(), defines.join(";")));
     if kind == IntegratorKind::Radiosity {

@@ -7,6 +7,7 @@ mod args;
 mod convert;
 mod frames;
 mod identity;
+mod images;
 mod merge;
 mod parts;
 mod progress;
@@ -23,6 +24,7 @@ fn main() -> ExitCode {
         args::Command::Render(a) => run::render(a),
         args::Command::Convert(a) => convert::run(a),
         args::Command::Merge(a) => merge::run(a),
+        args::Command::Denoise(a) => images::denoise_command(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

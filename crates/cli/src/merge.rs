@@ -6,8 +6,8 @@
 //! samples are refused unless `--allow-incomplete`, and the message lists what is missing.
 
 use crate::args::MergeArgs;
+use crate::images::{parse_aovs, tone_map, write_film, Extras, RENDER_GAMMA};
 use crate::parts::{read_part, same_frame};
-use crate::run::{tone_map, RENDER_GAMMA};
 use anyhow::{bail, Context, Result};
 use candela_imageio::partial::{encode_partial, Partial, PartialMeta};
 use candela_imageio::write_atomically;
@@ -101,12 +101,31 @@ pub fn run(args: MergeArgs) -> Result<()> {
     } else {
         Some(merged_partial(&parts, &film)?)
     };
-    let image = film.rgb(0);
-    let tone = tone_map(&args.tone, RENDER_GAMMA);
-    for path in &images {
-        candela_imageio::write_image(path, &image, &tone)
-            .with_context(|| format!("writing '{}'", path.display()))?;
+    // The output variables the parts hold, after the radiance.
+    let aov_names = first
+        .meta
+        .settings
+        .iter()
+        .find(|(k, _)| k == "aovs")
+        .map(|(_, v)| v.as_str());
+    let aovs =
+        parse_aovs(aov_names).map_err(|e| anyhow::anyhow!("'{}': {e}", first_path.display()))?;
+    if 3 + aovs.channels() != film.channels() {
+        bail!(
+            "'{}': {} channels do not match its output variables",
+            first_path.display(),
+            film.channels()
+        );
     }
+    let extras = Extras {
+        aovs,
+        written: aovs,
+        exact_emission: false,
+        denoise: false,
+        keep_noisy: false,
+    };
+    let tone = tone_map(&args.tone, RENDER_GAMMA);
+    write_film(&images, &film, full, &extras, &tone)?;
     if let Some(bytes) = merged_partial {
         for path in &partials {
             write_atomically(path, &bytes)

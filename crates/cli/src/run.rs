@@ -1,15 +1,17 @@
 //! `candela demo` and `candela render`: load, validate options, render, write.
 
-use crate::args::{RenderArgs, SceneArgs, ToneArgs};
+use crate::args::{RenderArgs, SceneArgs};
 use crate::frames;
 use crate::identity;
+use crate::images::{parse_aovs, tone_map, write_film, Extras, RENDER_GAMMA};
 use crate::parts;
 use crate::progress::{json_string, Progress, ProgressMode};
 use crate::session::{self, run_passes, Ending, Interrupted, Job, Plan};
 use anyhow::{bail, Context, Result};
 use candela_imageio::partial::{encode_partial, Partial, PartialMeta};
-use candela_imageio::{write_atomically, Encoding, ToneMap};
+use candela_imageio::write_atomically;
 use candela_render::accel::AccelKind;
+use candela_render::aov::{Aov, AovSet};
 use candela_render::film::{Film, Window};
 use candela_render::integrator::{IntegratorKind, IntegratorSettings};
 use candela_render::radiosity::{
@@ -17,7 +19,6 @@ use candela_render::radiosity::{
 };
 use candela_render::render::RenderSettings;
 use candela_render::sampling::SamplerKind;
-use candela_render::Image;
 use candela_scene::{LoadOptions, LoadedScene};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -132,10 +133,26 @@ fn sampler_kind(args: &RenderArgs) -> Result<SamplerKind> {
     }
 }
 
+/// The output variables of `--aov`, with albedo and normal added for `--denoise`.
+fn aov_set(args: &RenderArgs) -> Result<AovSet> {
+    let mut set = parse_aovs(args.aov.as_deref())?;
+    if args.denoise {
+        set = set.with(Aov::Albedo).with(Aov::Normal).with(Aov::Emission);
+    }
+    Ok(set)
+}
+
 /// Everything the scene loaders need from the command line (checking the other options that
 /// need no scene first, so that a bad one fails before any work).
 fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
     sampler_kind(args)?;
+    aov_set(args)?;
+    if args.denoise && !candela_denoise::available() {
+        bail!(
+            "--denoise: Intel Open Image Denoise 2.x cannot be loaded: {}",
+            candela_denoise::HOW_TO_GET_OIDN
+        );
+    }
     let accel = match &args.accel {
         None => AccelKind::default(),
         Some(name) => {
@@ -154,19 +171,6 @@ fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
         defines.push((name.trim().to_string(), value.trim().to_string()));
     }
     Ok(LoadOptions { defines, accel })
-}
-
-/// Builds the tone mapping for LDR outputs, with `default_gamma` unless `--gamma` is given.
-pub fn tone_map(t: &ToneArgs, default_gamma: f32) -> ToneMap {
-    ToneMap {
-        factor: t.factor,
-        luminosity: t.luminosity,
-        encoding: if t.srgb {
-            Encoding::Srgb
-        } else {
-            Encoding::Gamma(t.gamma.unwrap_or(default_gamma))
-        },
-    }
 }
 
 /// The radiosity options of the command line (`--patch-size`, `--form-factors`, `--solver`,
@@ -241,9 +245,6 @@ fn radiosity_outcome(outcome: &RadiosityOutcome, args: &RenderArgs) -> Result<()
     Ok(())
 }
 
-/// The display gamma of rendered LDR images unless `--gamma` says otherwise.
-pub const RENDER_GAMMA: f32 = 2.2;
-
 fn render_frame(
     loaded: LoadedScene,
     args: &RenderArgs,
@@ -281,6 +282,7 @@ fn render_frame(
         spp: args.spp.or(hints.spp).unwrap_or(1),
         seed: args.seed,
         sampler: sampler_kind(args)?,
+        aovs: aov_set(args)?,
     };
     // What this job renders: a window of the frame and a range of sample indices.
     let window = match args.crop {
@@ -344,7 +346,8 @@ fn render_frame(
     } else {
         None
     };
-    let mut film = Film::new(settings.width, settings.height, window, 3);
+    let channels = 3 + settings.aovs.channels();
+    let mut film = Film::new(settings.width, settings.height, window, channels);
     let mut first = target.0;
     if let Some(path) = &paths.resume {
         let part = parts::read_part(path)?;
@@ -467,12 +470,15 @@ fn render_frame(
     if let Some(path) = &paths.partial {
         save_partial(path, &film, done)?;
     } else {
-        let image = crop(&film.rgb(0), window);
+        let extras = Extras {
+            aovs: settings.aovs,
+            written: parse_aovs(args.aov.as_deref())?,
+            exact_emission: kind == IntegratorKind::Path && !hints.hide_emitters,
+            denoise: args.denoise,
+            keep_noisy: !args.no_keep_noisy,
+        };
         let tone = tone_map(&args.tone, RENDER_GAMMA);
-        for path in &paths.outputs {
-            candela_imageio::write_image(path, &image, &tone)
-                .with_context(|| format!("writing '{}'", path.display()))?;
-        }
+        write_film(&paths.outputs, &film, window, &extras, &tone)?;
     }
     progress.event("done", "");
     if args.stats {
@@ -501,18 +507,4 @@ fn render_frame(
         );
     }
     Ok(())
-}
-
-/// The pixels of `window` of a frame-sized image (the image itself for the whole frame).
-fn crop(image: &Image, window: Window) -> Image {
-    if window == Window::full(image.width(), image.height()) {
-        return image.clone();
-    }
-    let mut out = Image::new(window.width(), window.height());
-    for y in window.y0..window.y1 {
-        for x in window.x0..window.x1 {
-            out.set(x - window.x0, y - window.y0, image.get(x, y));
-        }
-    }
-    out
 }

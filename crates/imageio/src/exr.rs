@@ -12,7 +12,8 @@
 use std::io::Cursor;
 
 use ::exr::prelude::{
-    traits::*, AnyChannels, FlatSamples, Image as ExrImage, Layer, SpecificChannels, Vec2,
+    traits::*, AnyChannel, AnyChannels, Encoding, FlatSamples, Image as ExrImage, Layer,
+    LayerAttributes, SpecificChannels, Vec2,
 };
 use candela_render::{Image, Rgb};
 
@@ -72,6 +73,97 @@ pub fn write_exr(img: &Image) -> Result<Vec<u8>, ImageError> {
             cause,
         })?;
     Ok(out.into_inner())
+}
+
+/// Extra per-pixel data written beside the colour: arbitrary output variables.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovLayer {
+    /// The layer's name (`albedo`, `normal`, …).
+    pub name: String,
+    /// Its channel names (`R`, `G`, `B`; `X`, `Y`, `Z`; …).
+    pub channels: Vec<String>,
+    /// Per pixel (top row first), one value per channel.
+    pub data: Vec<f32>,
+}
+
+/// Encodes `img` with f32 `R`, `G`, `B` channels and, for each layer, channels named
+/// `layer.channel` (the OpenEXR layer convention that Nuke, Blender and Mitsuba read).
+pub fn write_exr_layers(img: &Image, layers: &[AovLayer]) -> Result<Vec<u8>, ImageError> {
+    check_size(img.width(), img.height())?;
+    let n = img.width() * img.height();
+    let mut list = Vec::new();
+    for (k, name) in ["R", "G", "B"].into_iter().enumerate() {
+        let v: Vec<f32> = img.pixels().iter().map(|p| [p.r, p.g, p.b][k]).collect();
+        list.push(AnyChannel::new(name, FlatSamples::F32(v)));
+    }
+    for layer in layers {
+        let c = layer.channels.len();
+        if c == 0 || layer.data.len() != n * c {
+            return Err(ImageError::EmptyImage {
+                width: layer.data.len(),
+                height: c,
+            });
+        }
+        for (k, ch) in layer.channels.iter().enumerate() {
+            let v: Vec<f32> = layer.data.iter().skip(k).step_by(c).copied().collect();
+            list.push(AnyChannel::new(
+                format!("{}.{ch}", layer.name).as_str(),
+                FlatSamples::F32(v),
+            ));
+        }
+    }
+    let channels = AnyChannels::sort(list.into());
+    let layer = Layer::new(
+        (img.width(), img.height()),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        channels,
+    );
+    let mut out = Cursor::new(Vec::new());
+    ExrImage::from_layer(layer)
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|cause| ImageError::Exr {
+            action: "encode",
+            cause,
+        })?;
+    Ok(out.into_inner())
+}
+
+/// Channels by name, one value per pixel each.
+pub type NamedChannels = Vec<(String, Vec<f32>)>;
+
+/// Every full-resolution channel of the first layer of an OpenEXR file, by name, as f32, with
+/// the layer's size.
+pub fn read_exr_channels(
+    bytes: &[u8],
+) -> Result<(usize, usize, NamedChannels), ImageError> {
+    let decoded = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|cause| ImageError::Exr {
+            action: "decode",
+            cause,
+        })?;
+    let layer = &decoded.layer_data;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let channels = layer
+        .channel_data
+        .list
+        .iter()
+        .filter(|c| c.sample_data.len() == w * h)
+        .map(|c| {
+            let v = (0..w * h)
+                .map(|i| c.sample_data.value_by_flat_index(i).to_f32())
+                .collect();
+            (c.name.to_string(), v)
+        })
+        .collect();
+    Ok((w, h, channels))
 }
 
 /// The samples of the channel called `name`, if it has one sample per pixel.

@@ -212,6 +212,27 @@ impl Film {
         img
     }
 
+    /// The mean of channels `first..first + n` of each pixel of the whole frame, `n` values per
+    /// pixel, row-major (0 outside the window and where no sample arrived).
+    pub fn means(&self, first: usize, n: usize) -> Vec<f32> {
+        let mut out = vec![0.0; self.width * self.height * n];
+        let c = self.channels;
+        for y in self.window.y0..self.window.y1 {
+            for x in self.window.x0..self.window.x1 {
+                let i = (y - self.window.y0) * self.window.width() + (x - self.window.x0);
+                let count = self.counts[i];
+                if count == 0 {
+                    continue;
+                }
+                for k in 0..n {
+                    let s = from_fixed(self.sums[i * c + first + k]);
+                    out[(y * self.width + x) * n + k] = (s / count as f64) as f32;
+                }
+            }
+        }
+        out
+    }
+
     /// Total samples added (all pixels).
     pub fn samples(&self) -> u64 {
         self.counts.iter().map(|&n| n as u64).sum()

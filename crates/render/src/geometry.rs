@@ -73,6 +73,15 @@ impl Geometry {
         self.bounded
     }
 
+    /// The index of the shape primitive `prim` belongs to: objects first (in the order given),
+    /// then meshes.
+    pub fn shape_index(&self, prim: u32) -> u32 {
+        match self.prims[prim as usize] {
+            PrimRef::Object(i) => i,
+            PrimRef::Triangle { mesh, .. } => self.objects.len() as u32 + mesh,
+        }
+    }
+
     /// Number of primitives.
     #[inline]
     pub fn prim_count(&self) -> u32 {

@@ -6,6 +6,7 @@
 //! built, rendering cannot fail.
 
 pub mod accel;
+pub mod aov;
 pub mod camera;
 pub mod color;
 pub mod film;

@@ -12,6 +12,7 @@
 //! Samples whose radiance is NaN or infinite are rejected (counted in
 //! [`RayStats::rejected_samples`]): they count as samples but contribute zero.
 
+use crate::aov::{aov_sample, AovSet};
 use crate::color::Rgb;
 use crate::film::{to_fixed, Film, Window};
 use crate::image::Image;
@@ -39,6 +40,8 @@ pub struct RenderSettings {
     pub seed: u64,
     /// How the samples of a pixel are placed.
     pub sampler: SamplerKind,
+    /// Output variables summed after the radiance (film channels 3 and up).
+    pub aovs: AovSet,
 }
 
 impl Default for RenderSettings {
@@ -49,6 +52,7 @@ impl Default for RenderSettings {
             spp: 1,
             seed: 0,
             sampler: SamplerKind::Sobol,
+            aovs: AovSet::NONE,
         }
     }
 }
@@ -71,7 +75,8 @@ pub fn render(
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
     let window = Window::full(settings.width, settings.height);
-    let mut film = Film::new(settings.width, settings.height, window, 3);
+    let channels = 3 + settings.aovs.channels();
+    let mut film = Film::new(settings.width, settings.height, window, channels);
     let stats = render_pass(
         scene,
         integrator,
@@ -118,6 +123,12 @@ pub fn render_pass_or_cancel(
     cancel: &AtomicBool,
 ) -> Option<RayStats> {
     let win = film.window();
+    let film_channels = film.channels();
+    assert_eq!(
+        film_channels,
+        3 + settings.aovs.channels(),
+        "the film has a channel per radiance component and output variable"
+    );
     let tiles_x = win.width().div_ceil(TILE);
     let tiles_y = win.height().div_ceil(TILE);
     let tiles: Option<Vec<TileSums>> = (0..tiles_x * tiles_y)
@@ -135,7 +146,7 @@ pub fn render_pass_or_cancel(
                 y1: (y0 + TILE).min(win.y1),
             };
             let mut stats = RayStats::default();
-            let mut sums = Vec::with_capacity(rect.pixels() * 3);
+            let mut sums = Vec::with_capacity(rect.pixels() * film_channels);
             let mut counts = Vec::with_capacity(rect.pixels());
             // One sampler per tile, reset for every pixel (its tables are large).
             let mut sampler = Sampler::new(0, 0);
@@ -151,6 +162,17 @@ pub fn render_pass_or_cancel(
                         &mut stats,
                     );
                     sums.extend_from_slice(&sum);
+                    if !settings.aovs.is_empty() {
+                        aov_pixel(
+                            scene,
+                            settings,
+                            (x, y),
+                            (first, last),
+                            &mut sampler,
+                            &mut stats,
+                            &mut sums,
+                        );
+                    }
                     counts.push(n);
                 }
             }
@@ -192,13 +214,7 @@ fn render_pixel(
     for start in (first..last).step_by(BATCH) {
         let n = (last - start).min(BATCH as u32) as usize;
         for k in 0..n {
-            let [sx, sy] = sampler.pixel_sample(start + k as u32);
-            let u = (x as f32 + sx) / w;
-            let v = 1.0 - (y as f32 + sy) / h;
-            rays[k] = match scene.camera.lens {
-                None => scene.camera.ray(u, v),
-                Some(_) => scene.camera.ray_through_lens(u, v, sampler.next_2d()),
-            };
+            rays[k] = camera_ray(scene, (w, h), (x, y), start + k as u32, sampler);
             cursors[k] = sampler.cursor();
         }
         integrator.radiance_batch(
@@ -221,6 +237,58 @@ fn render_pixel(
         }
     }
     (sum, last.saturating_sub(first))
+}
+
+/// The camera ray of sample `i` of pixel (x, y) of a `w × h` image: the first numbers of the
+/// sample place it in the pixel, the next ones on the lens.
+#[inline]
+fn camera_ray(
+    scene: &Scene,
+    (w, h): (f32, f32),
+    (x, y): (usize, usize),
+    i: u32,
+    sampler: &mut Sampler,
+) -> Ray {
+    let [sx, sy] = sampler.pixel_sample(i);
+    let u = (x as f32 + sx) / w;
+    let v = 1.0 - (y as f32 + sy) / h;
+    match scene.camera.lens {
+        None => scene.camera.ray(u, v),
+        Some(_) => scene.camera.ray_through_lens(u, v, sampler.next_2d()),
+    }
+}
+
+/// Appends to `sums` the fixed-point sums of the output variables of samples `first..last` of
+/// pixel (x, y), seen along the same camera rays as the radiance.
+fn aov_pixel(
+    scene: &Scene,
+    settings: &RenderSettings,
+    (x, y): (usize, usize),
+    (first, last): (u32, u32),
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+    sums: &mut Vec<i128>,
+) {
+    let size = (settings.width as f32, settings.height as f32);
+    sampler.reset_for_pixel(
+        settings.sampler,
+        settings.seed,
+        (y * settings.width + x) as u64,
+        settings.spp,
+    );
+    let n = settings.aovs.channels();
+    let mut acc = [0i128; 16];
+    let mut vals = [0f32; 16];
+    for i in first..last {
+        let ray = camera_ray(scene, size, (x, y), i, sampler);
+        aov_sample(scene, &ray, settings.aovs, &mut vals[..n], stats);
+        for (a, &v) in acc.iter_mut().zip(&vals[..n]) {
+            if v.is_finite() {
+                *a += to_fixed(v);
+            }
+        }
+    }
+    sums.extend_from_slice(&acc[..n]);
 }
 
 #[cfg(test)]
@@ -280,6 +348,7 @@ mod tests {
                 spp: 3,
                 seed: 9,
                 sampler,
+                aovs: AovSet::NONE,
             };
             let run = |threads| {
                 let pool = rayon::ThreadPoolBuilder::new()
