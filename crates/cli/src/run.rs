@@ -225,6 +225,12 @@ fn render_and_write(
         spp: args.spp.or(hints.spp).unwrap_or(1),
         seed: args.seed,
         sampler: sampler_kind(args)?,
+        filter: args
+            .filter
+            .as_deref()
+            .and_then(candela_render::filter::Filter::by_name)
+            .or(hints.filter)
+            .unwrap_or_default(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)

@@ -9,6 +9,7 @@ pub mod accel;
 pub mod camera;
 pub mod color;
 pub mod film;
+pub mod filter;
 pub mod geometry;
 pub mod image;
 pub mod integrator;

@@ -14,6 +14,7 @@
 
 use crate::color::Rgb;
 use crate::film::{to_fixed, Film, Window};
+use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
 use crate::integrator::Integrator;
 use crate::math::{Point3, Ray, Vec3, BATCH};
@@ -38,6 +39,8 @@ pub struct RenderSettings {
     pub seed: u64,
     /// How the samples of a pixel are placed.
     pub sampler: SamplerKind,
+    /// The reconstruction filter the pixel samples are drawn from.
+    pub filter: Filter,
 }
 
 impl Default for RenderSettings {
@@ -48,6 +51,7 @@ impl Default for RenderSettings {
             spp: 1,
             seed: 0,
             sampler: SamplerKind::Sobol,
+            filter: Filter::Box,
         }
     }
 }
@@ -99,6 +103,7 @@ pub fn render_pass(
     let win = film.window();
     let tiles_x = win.width().div_ceil(TILE);
     let tiles_y = win.height().div_ceil(TILE);
+    let filter = FilterSampler::new(settings.filter);
     let tiles: Vec<(Window, Vec<i128>, Vec<u32>, RayStats)> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map(|tile| {
@@ -123,7 +128,7 @@ pub fn render_pass(
                         settings,
                         (x, y),
                         (first, last),
-                        &mut sampler,
+                        (&mut sampler, &filter),
                         &mut stats,
                     );
                     sums.extend_from_slice(&sum);
@@ -149,7 +154,7 @@ fn render_pixel(
     settings: &RenderSettings,
     (x, y): (usize, usize),
     (first, last): (u32, u32),
-    sampler: &mut Sampler,
+    (sampler, filter): (&mut Sampler, &FilterSampler),
     stats: &mut RayStats,
 ) -> ([i128; 3], u32) {
     let (w, h) = (settings.width as f32, settings.height as f32);
@@ -165,10 +170,12 @@ fn render_pixel(
     let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
     let mut cursors = [sampler.cursor(); BATCH];
     let mut radiance = [Rgb::BLACK; BATCH];
+    let mut weights = [1f32; BATCH];
     for start in (first..last).step_by(BATCH) {
         let n = (last - start).min(BATCH as u32) as usize;
         for k in 0..n {
-            let [sx, sy] = sampler.pixel_sample(start + k as u32);
+            let ([sx, sy], weight) = filter.sample(sampler.pixel_sample(start + k as u32));
+            weights[k] = weight;
             let u = (x as f32 + sx) / w;
             let v = 1.0 - (y as f32 + sy) / h;
             rays[k] = match scene.camera.lens {
@@ -185,7 +192,8 @@ fn render_pixel(
             stats,
             &mut radiance[..n],
         );
-        for l in &radiance[..n] {
+        for (l, &weight) in radiance[..n].iter().zip(&weights) {
+            let l = if weight == 1.0 { *l } else { *l * weight };
             stats.samples += 1;
             if l.is_finite() {
                 sum[0] += to_fixed(l.r);
@@ -256,6 +264,7 @@ mod tests {
                 spp: 3,
                 seed: 9,
                 sampler,
+                ..Default::default()
             };
             let run = |threads| {
                 let pool = rayon::ThreadPoolBuilder::new()

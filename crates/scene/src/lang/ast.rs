@@ -48,6 +48,8 @@ pub struct SceneDescription {
     pub ambient_lights: Vec<AmbientLight>,
     /// The `environment` statements, in order.
     pub environments: Vec<Environment>,
+    /// The reconstruction filter of a `filter(…)` statement, with its position.
+    pub filter: Option<(candela_render::filter::Filter, Pos)>,
 }
 
 impl SceneDescription {
@@ -62,6 +64,7 @@ impl SceneDescription {
             shape_index: HashMap::new(),
             shapes: Vec::new(),
             camera: None,
+            filter: None,
             lights: Vec::new(),
             ambient_lights: Vec::new(),
             environments: Vec::new(),

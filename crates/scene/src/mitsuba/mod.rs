@@ -31,7 +31,8 @@
 //!   interpolated one, Mitsuba on the side of the interpolated normal (only silhouettes differ);
 //! - a sphere whose `to_world` scales non-uniformly stays round, as in Mitsuba, but its uv follow
 //!   the rotation of the polar decomposition instead of Mitsuba's inverse `to_world`;
-//! - films are filtered with a box (warning otherwise), crop windows are ignored (warnings);
+//! - reconstruction filters are importance-sampled (no splatting; Gaussian when the film names
+//!   none, as in Mitsuba), crop windows are ignored (warnings);
 //! - colours are RGB: spectra must be single values (a flat emitted spectrum has the colour of
 //!   illuminant E, as in Mitsuba's RGB variants); conductor presets are Mitsuba's RGB values;
 //! - a scene without `<sensor>` gets a default camera (Mitsuba 3.9.1 cannot render it).
@@ -105,6 +106,7 @@ pub fn load_mitsuba(
             max_depth: Some(-1),
             rr_depth: Some(5),
             hide_emitters: false,
+            filter: Some(candela_render::filter::Filter::Gaussian { stddev: 0.5 }),
         },
         warnings: Vec::new(),
         materials: HashMap::new(),
