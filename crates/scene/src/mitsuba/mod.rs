@@ -39,6 +39,7 @@
 
 mod bsdfs;
 mod emitters;
+mod include;
 mod integrators;
 mod math;
 mod presets;
@@ -47,6 +48,7 @@ mod sensor;
 mod shapes;
 mod xml;
 
+use self::include::{Expander, Sources};
 use self::math::M4;
 use self::props::Props;
 use self::xml::Element;
@@ -71,7 +73,31 @@ pub fn load_mitsuba(
     opts: &LoadOptions,
 ) -> Result<LoadedScene, SceneError> {
     let src = SourceFile::new(path, text);
-    let (root, unused_defines) = xml::parse(&src, &opts.defines)?;
+    let mut sources = Sources::new(&src);
+    let (root, unused_defines) = {
+        let (mut root, unused) = xml::parse(&src, &opts.defines)?;
+        let mut ex = Expander {
+            sources: &mut sources,
+            defines: &opts.defines,
+            unused,
+        };
+        let mut stack = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
+        ex.expand(&mut root, path, &mut stack)?;
+        (root, ex.unused)
+    };
+    load_tree(src, &root, unused_defines, opts, &sources).map_err(|e| sources.remap(e))
+}
+
+/// Loads the scene whose tree (includes expanded) is `root`.
+fn load_tree(
+    src: SourceFile,
+    root: &Element,
+    unused_defines: Vec<String>,
+    opts: &LoadOptions,
+    sources: &Sources,
+) -> Result<LoadedScene, SceneError> {
+    let path = src.path.clone();
+    let path = path.as_path();
     if root.tag != "scene" {
         return Err(src.error(
             root.pos,
@@ -91,9 +117,10 @@ pub fn load_mitsuba(
         )
     })?;
     let mut ids = HashMap::new();
-    collect_ids(&root, &src, &mut ids)?;
+    collect_ids(root, &src, &mut ids)?;
     let mut l = Loader {
         src,
+        sources,
         ids,
         upgrade: major < 2,
         search: Vec::new(),
@@ -126,7 +153,7 @@ pub fn load_mitsuba(
             path.display()
         ));
     }
-    l.scene_element(&root)?;
+    l.scene_element(root)?;
     let Loader {
         scene,
         hints,
@@ -230,6 +257,8 @@ struct Loader<'t> {
     /// Elements being built (to report circular references).
     active: Vec<usize>,
     has_sensor: bool,
+    /// The main file and the included ones, to place positions in their file.
+    sources: &'t Sources,
     triangles: usize,
     mesh_bytes: f64,
 }
@@ -240,11 +269,8 @@ impl<'t> Loader<'t> {
     }
 
     fn warn(&mut self, pos: Pos, msg: impl AsRef<str>) {
-        self.warnings.push(format!(
-            "{}:{pos}: {}",
-            self.src.path.display(),
-            msg.as_ref()
-        ));
+        self.warnings
+            .push(format!("{}: {}", self.sources.describe(pos), msg.as_ref()));
     }
 
     /// The properties of `e`.
