@@ -253,7 +253,9 @@ struct Loader<'t> {
     /// Texture element → texture.
     textures: HashMap<usize, Texture>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
-    meshes: HashMap<PathBuf, Arc<Mesh>>,
+    /// Mesh files (serialized ones as `file/@index`) → the mesh and whether the file asks for
+    /// face normals.
+    meshes: HashMap<PathBuf, Arc<(Mesh, bool)>>,
     /// Elements being built (to report circular references).
     active: Vec<usize>,
     has_sensor: bool,
