@@ -16,8 +16,9 @@
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`,
 //!   `roughplastic` (all one-sided) and `twosided`; textures `bitmap` and `checkerboard`;
 //! - emitters `point`, `spot`, `directional`, `constant`, `envmap`;
-//! - integrators `path` and its equivalents without media (`volpath`, …) and `direct` (the path
-//!   tracer limited to depth 2), which become [`RenderHints`].
+//! - integrators `path` and its equivalents without media (`volpath`, …), `direct` (the path
+//!   tracer limited to depth 2) and `moment` (its first nested integrator), which become
+//!   [`RenderHints`]; `<include>` (see `include`); `serialized` meshes.
 //!
 //! Unknown parameters are warnings with their position; unknown plugins, and features whose
 //! absence would change the image, are errors at their position.
