@@ -95,14 +95,15 @@ impl Builder<'_> {
                 offset: [0.0; 2],
             },
             PigmentKind::Image(file) => {
-                let image = match self.images.get(&file.path) {
+                let path = self.locate(file, "image")?;
+                let image = match self.images.get(&path) {
                     Some(i) => i.clone(),
                     None => {
-                        let img = candela_imageio::read_image(&file.path).map_err(|e| {
+                        let img = candela_imageio::read_image(&path).map_err(|e| {
                             self.err(file.pos, format!("cannot load image '{}': {e}", file.name))
                         })?;
                         let img = Arc::new(img);
-                        self.images.insert(file.path.clone(), img.clone());
+                        self.images.insert(path, img.clone());
                         img
                     }
                 };
@@ -317,11 +318,37 @@ impl Builder<'_> {
         }
     }
 
+    /// Where the file `file` names is: beside the scene file, or else (for a relative name)
+    /// in the current directory, as the course's program looks for it; an error naming both
+    /// places when it is in neither.
+    fn locate(&self, file: &ast::FileRef, what: &str) -> Result<PathBuf, SceneError> {
+        let here = std::path::Path::new(&file.name);
+        if file.path.exists() || here.is_absolute() {
+            return Ok(file.path.clone());
+        }
+        if here.exists() {
+            return Ok(here.to_path_buf());
+        }
+        let cwd = std::env::current_dir()
+            .map(|d| d.join(here))
+            .unwrap_or_else(|_| here.to_path_buf());
+        Err(self.err(
+            file.pos,
+            format!(
+                "{what} file '{}' not found: tried '{}' (beside the scene file) and '{}' (the current directory)",
+                file.name,
+                file.path.display(),
+                cwd.display()
+            ),
+        ))
+    }
+
     fn mesh(&mut self, file: &ast::FileRef) -> Result<Arc<Mesh>, SceneError> {
-        if let Some(m) = self.meshes.get(&file.path) {
+        let path = self.locate(file, "mesh")?;
+        if let Some(m) = self.meshes.get(&path) {
             return Ok(m.clone());
         }
-        let m = crate::mesh::load_mesh(&file.path, &Transform::IDENTITY)
+        let m = crate::mesh::load_mesh(&path, &Transform::IDENTITY)
             .map_err(|e| self.err(file.pos, e))?;
         if m.is_empty() {
             self.report.warnings.push(format!(
@@ -332,7 +359,7 @@ impl Builder<'_> {
             ));
         }
         let m = Arc::new(m);
-        self.meshes.insert(file.path.clone(), m.clone());
+        self.meshes.insert(path, m.clone());
         Ok(m)
     }
 
