@@ -15,7 +15,8 @@ use candela_render::material::{Distribution, Lobe, Material, MaterialId, Microfa
 use candela_render::math::{Transform, Vec3};
 use candela_render::scene::SceneBuilder;
 use candela_render::shape::{
-    Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polyhedron, Shape, Solid, Sphere,
+    Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polygon, PolygonError, Polyhedron,
+    Shape, Solid, Sphere,
 };
 use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene};
@@ -421,6 +422,20 @@ impl Builder<'_> {
                 mesh.props.emission = e;
                 self.add_mesh(mesh);
             }
+            ShapeKind::Polygon { material, vertices } => {
+                let (m, e) = self.props(material);
+                let points: Vec<_> = vertices.iter().map(|(v, _)| extra.point(*v)).collect();
+                let polygon = Polygon::new(&points).map_err(|err| {
+                    let pos = match err {
+                        PolygonError::NotCoplanar(i) | PolygonError::NotConvex(i) => {
+                            vertices.get(i).map_or(shape.pos, |v| v.1)
+                        }
+                        _ => shape.pos,
+                    };
+                    self.err(pos, format!("polygon: {err}"))
+                })?;
+                self.scene.add_shape(Shape::Polygon(polygon), m, e);
+            }
             ShapeKind::Parallelogram {
                 material,
                 origin,
@@ -562,9 +577,9 @@ impl Builder<'_> {
                 let named = &self.desc.named_shape(*index).shape;
                 self.csg(named, &t, nodes, depth + 1)
             }
-            ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } => Err(self.err(
+            ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } | ShapeKind::Polygon { .. } => Err(self.err(
                 shape.pos,
-                "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles and parallelograms enclose no volume",
+                "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles, parallelograms and polygons enclose no volume",
             )),
         }
     }

@@ -79,3 +79,65 @@ fn numbers_are_arithmetic_expressions() {
     let deep = format!("float x({}1{})", "(".repeat(1000), ")".repeat(1000));
     assert!(error_of(&deep).contains("nested too deeply"));
 }
+
+/// A regular hexagon of circumradius 1 facing an orthogonal camera covers 3√3/2 of the 4×4
+/// screen: the fraction of pixel centres that hit it.
+#[test]
+fn the_convex_polygon_covers_its_area() {
+    use candela_render::integrator::OnOff;
+    use candela_render::render::{render, RenderSettings};
+    let dir = tmpdir("course-polygon");
+    let scene = dir.join("hex.txt");
+    // In the plane x = 1, seen along +x by the course camera (screen y, z ∈ [-2, 2]).
+    let mut text = String::from("material m(diffuse(<1, 1, 1>))\npolygon(m");
+    for i in 0..6 {
+        let a = i as f64 * std::f64::consts::PI / 3.0;
+        text += &format!(", [1, {}, {}]", a.cos(), a.sin());
+    }
+    text += ")\ncamera(orthogonal, scaling([2, 2, 2]), 1, 1)\n";
+    std::fs::write(&scene, &text).unwrap();
+    let l = load_scene(&scene, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let n = 200;
+    let settings = RenderSettings {
+        width: n,
+        height: n,
+        ..Default::default()
+    };
+    let img = render(&l.scene, &OnOff, &settings, &|_| {}).image;
+    let hits = img.pixels().iter().filter(|p| p.r > 0.5).count() as f64;
+    let expected = 1.5 * 3f64.sqrt() / 16.0;
+    let got = hits / (n * n) as f64;
+    assert!((got - expected).abs() < 0.005, "{got} vs {expected}");
+
+    // Errors at the offending vertex.
+    use support::lang::parse;
+    let build = |t: &str| {
+        let d = parse(t);
+        candela_scene::builder::build_scene(&d, Default::default())
+            .err()
+            .map(|e| format!("{}: {}", e.pos.unwrap_or_default(), e.message))
+    };
+    let m = "material m(diffuse(<1, 1, 1>))\n";
+    assert_eq!(
+        build(&format!(
+            "{m}polygon(m, [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 1])"
+        ))
+        .unwrap(),
+        "2:45: polygon: vertex 4 is not in the plane of the others"
+    );
+    assert!(build(&format!(
+        "{m}polygon(m, [0, 0, 0], [2, 0, 0], [1, 0.5, 0], [1, 2, 0])"
+    ))
+    .unwrap()
+    .contains("polygon: the polygon is not convex"));
+    assert!(
+        support::lang::error_of(&format!("{m}polygon(m, [0, 0, 0], [1, 0, 0])"))
+            .starts_with("2:32: expected ',' but found ')': too few arguments")
+    );
+    assert_eq!(
+        build(&format!(
+            "{m}polygon(m, [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0])"
+        )),
+        None
+    );
+}

@@ -41,6 +41,7 @@ const RESERVED_SHAPE_NAMES: &[&str] = &[
     "box",
     "triangle",
     "parallelogram",
+    "polygon",
     "polyhedron",
     "mesh",
     "union",
