@@ -79,7 +79,7 @@ impl Polygon {
         for i in 0..vertices.len() {
             let a = vertices[i] - o;
             let b = vertices[(i + 1) % vertices.len()] - o;
-            nw = nw + a.cross(b);
+            nw += a.cross(b);
         }
         let area = 0.5 * nw.norm();
         let extent = vertices
