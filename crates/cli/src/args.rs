@@ -56,6 +56,10 @@ pub struct RenderArgs {
     /// How the samples of a pixel are placed: sobol (default), stratified, independent.
     #[arg(long, value_name = "NAME")]
     pub sampler: Option<String>,
+    /// The reconstruction filter: box (the candela language's default), tent, gaussian (Mitsuba's
+    /// default), mitchell, catmullrom, lanczos.
+    #[arg(long, value_name = "NAME", value_parser = clap::builder::PossibleValuesParser::new(candela_render::filter::FILTER_NAMES))]
+    pub filter: Option<String>,
     /// The integrator.
     #[arg(long, value_name = "NAME")]
     pub integrator: Option<String>,
@@ -72,7 +76,12 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Overrides a `float` variable (or a Mitsuba `<default>`): NAME=VALUE or NAME:VALUE.
-    #[arg(short = 'd', long = "define", value_name = "NAME=VALUE")]
+    #[arg(
+        short = 'd',
+        long = "define",
+        visible_alias = "declare-float",
+        value_name = "NAME=VALUE"
+    )]
     pub defines: Vec<String>,
     /// Radiosity: largest patch edge (default from the scene's size).
     #[arg(long, allow_negative_numbers = true, value_parser = positive_f32)]

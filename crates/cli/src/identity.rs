@@ -40,6 +40,7 @@ pub fn pixel_settings(
         ("candela".to_string(), env!("CARGO_PKG_VERSION").to_string()),
         ("seed".to_string(), settings.seed.to_string()),
         ("sampler".to_string(), format!("{:?}", settings.sampler)),
+        ("filter".to_string(), format!("{:?}", settings.filter)),
         ("integrator".to_string(), format!("{kind:?}")),
         (
             "max_depth".to_string(),

@@ -283,6 +283,12 @@ fn render_frame(
         seed: args.seed,
         sampler: sampler_kind(args)?,
         aovs: aov_set(args)?,
+        filter: args
+            .filter
+            .as_deref()
+            .and_then(candela_render::filter::Filter::by_name)
+            .or(hints.filter)
+            .unwrap_or_default(),
     };
     // What this job renders: a window of the frame and a range of sample indices.
     let window = match args.crop {

@@ -80,6 +80,14 @@ pub enum ImageError {
         /// The codec's error.
         cause: image::ImageError,
     },
+    /// The `image` crate failed to decode a read-only format (JPEG, BMP, TGA, PNM).
+    #[error("cannot decode {format}: {cause}")]
+    Raster {
+        /// The format's name.
+        format: &'static str,
+        /// The codec's error.
+        cause: image::ImageError,
+    },
     /// The `image` crate failed to decode or encode a Radiance HDR image.
     #[error("cannot {action} Radiance HDR: {cause}")]
     Hdr {

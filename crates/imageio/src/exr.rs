@@ -135,9 +135,7 @@ pub type NamedChannels = Vec<(String, Vec<f32>)>;
 
 /// Every full-resolution channel of the first layer of an OpenEXR file, by name, as f32, with
 /// the layer's size.
-pub fn read_exr_channels(
-    bytes: &[u8],
-) -> Result<(usize, usize, NamedChannels), ImageError> {
+pub fn read_exr_channels(bytes: &[u8]) -> Result<(usize, usize, NamedChannels), ImageError> {
     let decoded = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -1,4 +1,5 @@
-//! candela's image files: PFM, OpenEXR, Radiance HDR and PNG, plus the course's tone mapping.
+//! candela's image files: PFM, OpenEXR, Radiance HDR and PNG (read and written), JPEG, BMP, TGA
+//! and PNM (read only), plus the course's tone mapping.
 //!
 //! The format of a file is chosen by its extension, case-insensitively: `.pfm`, `.exr` and
 //! `.hdr` hold linear HDR data, `.png` holds tone-mapped 8-bit sRGB-ish data (see [`ToneMap`]).
@@ -17,6 +18,7 @@ pub mod hdr;
 pub mod partial;
 pub mod pfm;
 pub mod png;
+pub mod raster;
 pub mod tonemap;
 
 use std::{fs, path::Path};
@@ -100,8 +102,26 @@ pub fn supported_extension(path: &Path) -> bool {
 }
 
 /// Reads an image, choosing the decoder by the file's extension.
+///
+/// Beside the four formats that are also written, the read-only 8-bit formats of [`raster`]
+/// (JPEG, BMP, TGA, PNM) are decoded from sRGB to linear RGB.
 pub fn read_image(path: &Path) -> Result<Image, ImageError> {
-    read_as(path, Format::from_path(path)?)
+    match Format::from_path(path) {
+        Ok(format) => read_as(path, format),
+        Err(unsupported) => {
+            let Some((format, name)) = raster::format_of(path) else {
+                return Err(unsupported);
+            };
+            let bytes = fs::read(path).map_err(ImageError::io(path, "read"))?;
+            raster::decode(&bytes, format, name).map_err(|e| e.in_file(path))
+        }
+    }
+}
+
+/// True when the values stored in the image file `path` are sRGB-encoded (8-bit formats: PNG
+/// and the read-only ones), false for the linear formats (PFM, OpenEXR, Radiance HDR).
+pub fn is_srgb_encoded(path: &Path) -> bool {
+    matches!(Format::from_path(path), Ok(Format::Png)) || raster::format_of(path).is_some()
 }
 
 /// Writes an image atomically, choosing the encoder by the file's extension: `.pfm` and

@@ -105,7 +105,21 @@ fn png_values_are_decoded_from_srgb() {
 #[test]
 fn unknown_extensions_are_refused_before_writing() {
     let dir = TempDir::new();
-    for name in ["x.bmp", "x", "x.pfm.tmp"] {
+    // `.bmp` and `.jpg` are read (see `raster`), never written.
+    for name in ["x.bmp", "x.jpg"] {
+        let path = dir.path(name);
+        assert!(!supported_extension(&path));
+        let err = write_image(&path, &hdr_image(), &ToneMap::default()).unwrap_err();
+        assert!(
+            matches!(err, ImageError::UnsupportedExtension { .. }),
+            "{err}"
+        );
+        assert!(!matches!(
+            read_image(&path).unwrap_err(),
+            ImageError::UnsupportedExtension { .. }
+        ));
+    }
+    for name in ["x.gif", "x", "x.pfm.tmp"] {
         let path = dir.path(name);
         assert!(!supported_extension(&path));
         let err = write_image(&path, &hdr_image(), &ToneMap::default()).unwrap_err();

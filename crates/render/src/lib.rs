@@ -10,6 +10,7 @@ pub mod aov;
 pub mod camera;
 pub mod color;
 pub mod film;
+pub mod filter;
 pub mod geometry;
 pub mod image;
 pub mod integrator;

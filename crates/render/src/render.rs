@@ -15,6 +15,7 @@
 use crate::aov::{aov_sample, AovSet};
 use crate::color::Rgb;
 use crate::film::{to_fixed, Film, Window};
+use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
 use crate::integrator::Integrator;
 use crate::math::{Point3, Ray, Vec3, BATCH};
@@ -42,6 +43,8 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     /// Output variables summed after the radiance (film channels 3 and up).
     pub aovs: AovSet,
+    /// The reconstruction filter the pixel samples are drawn from.
+    pub filter: Filter,
 }
 
 impl Default for RenderSettings {
@@ -53,6 +56,7 @@ impl Default for RenderSettings {
             seed: 0,
             sampler: SamplerKind::Sobol,
             aovs: AovSet::NONE,
+            filter: Filter::Box,
         }
     }
 }
@@ -131,6 +135,7 @@ pub fn render_pass_or_cancel(
     );
     let tiles_x = win.width().div_ceil(TILE);
     let tiles_y = win.height().div_ceil(TILE);
+    let filter = FilterSampler::new(settings.filter);
     let tiles: Option<Vec<TileSums>> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map(|tile| {
@@ -158,7 +163,7 @@ pub fn render_pass_or_cancel(
                         settings,
                         (x, y),
                         (first, last),
-                        &mut sampler,
+                        (&mut sampler, &filter),
                         &mut stats,
                     );
                     sums.extend_from_slice(&sum);
@@ -168,7 +173,7 @@ pub fn render_pass_or_cancel(
                             settings,
                             (x, y),
                             (first, last),
-                            &mut sampler,
+                            (&mut sampler, &filter),
                             &mut stats,
                             &mut sums,
                         );
@@ -195,7 +200,7 @@ fn render_pixel(
     settings: &RenderSettings,
     (x, y): (usize, usize),
     (first, last): (u32, u32),
-    sampler: &mut Sampler,
+    (sampler, filter): (&mut Sampler, &FilterSampler),
     stats: &mut RayStats,
 ) -> ([i128; 3], u32) {
     let (w, h) = (settings.width as f32, settings.height as f32);
@@ -211,10 +216,12 @@ fn render_pixel(
     let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
     let mut cursors = [sampler.cursor(); BATCH];
     let mut radiance = [Rgb::BLACK; BATCH];
+    let mut weights = [1f32; BATCH];
     for start in (first..last).step_by(BATCH) {
         let n = (last - start).min(BATCH as u32) as usize;
         for k in 0..n {
-            rays[k] = camera_ray(scene, (w, h), (x, y), start + k as u32, sampler);
+            (rays[k], weights[k]) =
+                camera_ray(scene, (w, h), (x, y), start + k as u32, (sampler, filter));
             cursors[k] = sampler.cursor();
         }
         integrator.radiance_batch(
@@ -225,7 +232,8 @@ fn render_pixel(
             stats,
             &mut radiance[..n],
         );
-        for l in &radiance[..n] {
+        for (l, &weight) in radiance[..n].iter().zip(&weights) {
+            let l = if weight == 1.0 { *l } else { *l * weight };
             stats.samples += 1;
             if l.is_finite() {
                 sum[0] += to_fixed(l.r);
@@ -239,23 +247,25 @@ fn render_pixel(
     (sum, last.saturating_sub(first))
 }
 
-/// The camera ray of sample `i` of pixel (x, y) of a `w × h` image: the first numbers of the
-/// sample place it in the pixel, the next ones on the lens.
+/// The camera ray of sample `i` of pixel (x, y) of a `w × h` image and the sample's filter
+/// weight: the first numbers of the sample place it in the pixel (through the filter's
+/// distribution), the next ones on the lens.
 #[inline]
 fn camera_ray(
     scene: &Scene,
     (w, h): (f32, f32),
     (x, y): (usize, usize),
     i: u32,
-    sampler: &mut Sampler,
-) -> Ray {
-    let [sx, sy] = sampler.pixel_sample(i);
+    (sampler, filter): (&mut Sampler, &FilterSampler),
+) -> (Ray, f32) {
+    let ([sx, sy], weight) = filter.sample(sampler.pixel_sample(i));
     let u = (x as f32 + sx) / w;
     let v = 1.0 - (y as f32 + sy) / h;
-    match scene.camera.lens {
+    let ray = match scene.camera.lens {
         None => scene.camera.ray(u, v),
         Some(_) => scene.camera.ray_through_lens(u, v, sampler.next_2d()),
-    }
+    };
+    (ray, weight)
 }
 
 /// Appends to `sums` the fixed-point sums of the output variables of samples `first..last` of
@@ -265,7 +275,7 @@ fn aov_pixel(
     settings: &RenderSettings,
     (x, y): (usize, usize),
     (first, last): (u32, u32),
-    sampler: &mut Sampler,
+    (sampler, filter): (&mut Sampler, &FilterSampler),
     stats: &mut RayStats,
     sums: &mut Vec<i128>,
 ) {
@@ -280,7 +290,8 @@ fn aov_pixel(
     let mut acc = [0i128; 16];
     let mut vals = [0f32; 16];
     for i in first..last {
-        let ray = camera_ray(scene, size, (x, y), i, sampler);
+        // The variables are plain means over the same rays (filter weights left out).
+        let (ray, _) = camera_ray(scene, size, (x, y), i, (&mut *sampler, filter));
         aov_sample(scene, &ray, settings.aovs, &mut vals[..n], stats);
         for (a, &v) in acc.iter_mut().zip(&vals[..n]) {
             if v.is_finite() {
@@ -348,7 +359,7 @@ mod tests {
                 spp: 3,
                 seed: 9,
                 sampler,
-                aovs: AovSet::NONE,
+                ..Default::default()
             };
             let run = |threads| {
                 let pool = rayon::ThreadPoolBuilder::new()

@@ -15,7 +15,8 @@ use candela_render::material::{Distribution, Lobe, Material, MaterialId, Microfa
 use candela_render::math::{Transform, Vec3};
 use candela_render::scene::SceneBuilder;
 use candela_render::shape::{
-    Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polyhedron, Shape, Solid, Sphere,
+    Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polygon, PolygonError, Polyhedron,
+    Shape, Solid, Sphere,
 };
 use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene};
@@ -95,15 +96,16 @@ impl Builder<'_> {
                 offset: [0.0; 2],
             },
             PigmentKind::Image(file) => {
-                let image = match self.images.get(&file.path) {
+                let path = self.locate(file, "image")?;
+                let image = match self.images.get(&path) {
                     Some(i) => i.clone(),
                     None => {
-                        crate::inputs::record(&file.path);
-                        let img = candela_imageio::read_image(&file.path).map_err(|e| {
+                        crate::inputs::record(&path);
+                        let img = candela_imageio::read_image(&path).map_err(|e| {
                             self.err(file.pos, format!("cannot load image '{}': {e}", file.name))
                         })?;
                         let img = Arc::new(img);
-                        self.images.insert(file.path.clone(), img.clone());
+                        self.images.insert(path, img.clone());
                         img
                     }
                 };
@@ -318,11 +320,37 @@ impl Builder<'_> {
         }
     }
 
+    /// Where the file `file` names is: beside the scene file, or else (for a relative name)
+    /// in the current directory, as the course's program looks for it; an error naming both
+    /// places when it is in neither.
+    fn locate(&self, file: &ast::FileRef, what: &str) -> Result<PathBuf, SceneError> {
+        let here = std::path::Path::new(&file.name);
+        if file.path.exists() || here.is_absolute() {
+            return Ok(file.path.clone());
+        }
+        if here.exists() {
+            return Ok(here.to_path_buf());
+        }
+        let cwd = std::env::current_dir()
+            .map(|d| d.join(here))
+            .unwrap_or_else(|_| here.to_path_buf());
+        Err(self.err(
+            file.pos,
+            format!(
+                "{what} file '{}' not found: tried '{}' (beside the scene file) and '{}' (the current directory)",
+                file.name,
+                file.path.display(),
+                cwd.display()
+            ),
+        ))
+    }
+
     fn mesh(&mut self, file: &ast::FileRef) -> Result<Arc<Mesh>, SceneError> {
-        if let Some(m) = self.meshes.get(&file.path) {
+        let path = self.locate(file, "mesh")?;
+        if let Some(m) = self.meshes.get(&path) {
             return Ok(m.clone());
         }
-        let m = crate::mesh::load_mesh(&file.path, &Transform::IDENTITY)
+        let m = crate::mesh::load_mesh(&path, &Transform::IDENTITY)
             .map_err(|e| self.err(file.pos, e))?;
         if m.is_empty() {
             self.report.warnings.push(format!(
@@ -333,7 +361,7 @@ impl Builder<'_> {
             ));
         }
         let m = Arc::new(m);
-        self.meshes.insert(file.path.clone(), m.clone());
+        self.meshes.insert(path, m.clone());
         Ok(m)
     }
 
@@ -394,6 +422,20 @@ impl Builder<'_> {
                 mesh.props.material = m;
                 mesh.props.emission = e;
                 self.add_mesh(mesh);
+            }
+            ShapeKind::Polygon { material, vertices } => {
+                let (m, e) = self.props(material);
+                let points: Vec<_> = vertices.iter().map(|(v, _)| extra.point(*v)).collect();
+                let polygon = Polygon::new(&points).map_err(|err| {
+                    let pos = match err {
+                        PolygonError::NotCoplanar(i) | PolygonError::NotConvex(i) => {
+                            vertices.get(i).map_or(shape.pos, |v| v.1)
+                        }
+                        _ => shape.pos,
+                    };
+                    self.err(pos, format!("polygon: {err}"))
+                })?;
+                self.scene.add_shape(Shape::Polygon(polygon), m, e);
             }
             ShapeKind::Parallelogram {
                 material,
@@ -536,9 +578,9 @@ impl Builder<'_> {
                 let named = &self.desc.named_shape(*index).shape;
                 self.csg(named, &t, nodes, depth + 1)
             }
-            ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } => Err(self.err(
+            ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } | ShapeKind::Polygon { .. } => Err(self.err(
                 shape.pos,
-                "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles and parallelograms enclose no volume",
+                "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles, parallelograms and polygons enclose no volume",
             )),
         }
     }

@@ -17,6 +17,7 @@ pub mod load;
 pub mod loaded;
 pub mod mesh;
 pub mod mitsuba;
+pub mod serialized;
 
 pub use error::{Pos, SceneError, SourceFile};
 pub use lang::{parse_define, parse_scene, parse_scene_file, SceneDescription};

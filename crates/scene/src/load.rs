@@ -57,10 +57,13 @@ fn load_candela(
     path: &Path,
     text: &str,
     opts: &LoadOptions,
-    hints: RenderHints,
+    mut hints: RenderHints,
 ) -> Result<LoadedScene, SceneError> {
     let defines = numeric_defines(path, &opts.defines)?;
     let desc = parse_scene(text, path, &defines)?;
+    if let Some((filter, _)) = desc.filter {
+        hints.filter = Some(filter);
+    }
     let (scene, report) = build_scene(&desc, opts.accel)?;
     Ok(LoadedScene {
         scene,

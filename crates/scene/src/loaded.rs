@@ -2,6 +2,7 @@
 //! [`RenderHints`]), shared by the loader of each format.
 
 use candela_render::accel::AccelKind;
+use candela_render::filter::Filter;
 use candela_render::Scene;
 use std::path::PathBuf;
 
@@ -33,6 +34,9 @@ pub struct RenderHints {
     pub rr_depth: Option<u32>,
     /// Hide directly visible emitters.
     pub hide_emitters: bool,
+    /// The reconstruction filter (Mitsuba's `<rfilter>`, Gaussian when the film names none; the
+    /// candela language's `filter` statement).
+    pub filter: Option<Filter>,
 }
 
 /// A loaded scene with its hints and warnings.

@@ -491,7 +491,8 @@ const REJECTED: &[(&str, &str)] = &[
     ("sphere(m, @)", "2:11: invalid character '@'"),
     ("material a(diffuse(image(\"sky.pfm)))", "2:26: unterminated string"),
     ("sphere(m, translation([1, 2, 3x]))", "2:30: invalid number '3x'"),
-    ("sphere(m, rotation_z(- -x))", "2:24: expected a number but found '-'"),
+    ("sphere(m, rotation_z(- -x))", "2:25: unknown variable 'x'"),
+    ("sphere(m, rotation_z(2 * ))", "2:26: expected a number but found ')'"),
 ];
 
 #[test]

@@ -223,14 +223,40 @@ fn film_sampler_and_integrator_hints() {
         ),
         "2:78: '99999999999999999999' is out of range",
     );
-    // An unknown integrator is only a warning (the scene renders with the path tracer).
-    let l = load(&scene(r#"<integrator type="bdpt"/>"#));
+    // An unknown integrator is an error at its position.
+    assert_error_starts_with(
+        &scene(r#"<integrator type="bdpt"/>"#),
+        "2:1: unsupported integrator 'bdpt'",
+    );
+    // `moment` renders its first nested integrator as that integrator, with a note.
+    let l = load(&scene(
+        r#"<integrator type="moment">
+    <integrator type="direct"/>
+    <integrator type="path"/>
+</integrator>"#,
+    ));
+    assert_eq!(
+        (l.hints.integrator.as_deref(), l.hints.max_depth),
+        (Some("path"), Some(2))
+    );
     assert!(
-        l.warnings
-            .iter()
-            .any(|w| w.contains("scenes/test.xml:2:1: integrator 'bdpt' is not supported")),
+        l.warnings.iter().any(|w| w.contains(
+            "scenes/test.xml:2:1: integrator 'moment': rendering its first nested integrator 'direct'"
+        )),
         "{:?}",
         l.warnings
+    );
+    let l = load(&scene(
+        r#"<integrator type="moment"><integrator type="path"><integer name="max_depth" value="3"/></integrator></integrator>"#,
+    ));
+    assert_eq!(l.hints.max_depth, Some(3));
+    assert_error_starts_with(
+        &scene(r#"<integrator type="moment"><integrator type="bdpt"/></integrator>"#),
+        "2:27: unsupported integrator 'bdpt'",
+    );
+    assert_error_starts_with(
+        &scene(r#"<integrator type="moment"/>"#),
+        "2:1: integrator 'moment' needs a nested <integrator>",
     );
 }
 

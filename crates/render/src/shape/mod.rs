@@ -14,6 +14,7 @@ mod disk;
 mod mesh;
 mod parallelogram;
 mod plane;
+mod polygon;
 mod polyhedron;
 mod sphere;
 
@@ -23,6 +24,7 @@ pub use disk::Disk;
 pub use mesh::{intersect_triangle, Mesh, ShearedRay};
 pub use parallelogram::Parallelogram;
 pub use plane::Plane;
+pub use polygon::{Polygon, PolygonError};
 pub use polyhedron::{Polyhedron, PolyhedronError};
 pub use sphere::Sphere;
 
@@ -73,6 +75,8 @@ pub enum Shape {
     Parallelogram(Parallelogram),
     /// A convex polyhedron.
     Polyhedron(Polyhedron),
+    /// A convex polygon.
+    Polygon(Polygon),
     /// The unit disk, transformed.
     Disk(Disk),
     /// A CSG tree.
@@ -89,6 +93,7 @@ impl Shape {
             Shape::Cube(c) => c.intersect(ray),
             Shape::Parallelogram(p) => p.intersect(ray),
             Shape::Polyhedron(p) => p.intersect(ray),
+            Shape::Polygon(p) => p.intersect(ray),
             Shape::Disk(d) => d.intersect(ray),
             Shape::Csg(c) => c.intersect(ray),
         }
@@ -102,6 +107,7 @@ impl Shape {
             Shape::Cube(c) => c.geometry(ray, hit.t, hit.sub),
             Shape::Parallelogram(p) => p.geometry(hit.uv[0], hit.uv[1]),
             Shape::Polyhedron(p) => p.geometry(ray, hit.t, hit.sub),
+            Shape::Polygon(p) => p.geometry(hit.uv[0], hit.uv[1]),
             Shape::Disk(d) => d.geometry(hit.uv[0], hit.uv[1]),
             Shape::Csg(c) => c.geometry(ray, hit),
         }
@@ -123,6 +129,7 @@ impl Shape {
             Shape::Cube(c) => Some(c.bounds()),
             Shape::Parallelogram(p) => Some(p.bounds()),
             Shape::Polyhedron(p) => Some(p.bounds()),
+            Shape::Polygon(p) => Some(p.bounds()),
             Shape::Disk(d) => Some(d.bounds()),
             Shape::Csg(c) => Some(c.bounds()),
         }

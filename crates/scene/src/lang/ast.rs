@@ -48,6 +48,8 @@ pub struct SceneDescription {
     pub ambient_lights: Vec<AmbientLight>,
     /// The `environment` statements, in order.
     pub environments: Vec<Environment>,
+    /// The reconstruction filter of a `filter(…)` statement, with its position.
+    pub filter: Option<(candela_render::filter::Filter, Pos)>,
 }
 
 impl SceneDescription {
@@ -62,6 +64,7 @@ impl SceneDescription {
             shape_index: HashMap::new(),
             shapes: Vec::new(),
             camera: None,
+            filter: None,
             lights: Vec::new(),
             ambient_lights: Vec::new(),
             environments: Vec::new(),
@@ -400,7 +403,9 @@ impl Shape {
             | ShapeKind::Mesh { transform, .. }
             | ShapeKind::Csg { transform, .. }
             | ShapeKind::Instance { transform, .. } => *transform,
-            ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } => Transform::IDENTITY,
+            ShapeKind::Triangle { .. }
+            | ShapeKind::Parallelogram { .. }
+            | ShapeKind::Polygon { .. } => Transform::IDENTITY,
         }
     }
 
@@ -412,6 +417,7 @@ impl Shape {
             | ShapeKind::Box { material, .. }
             | ShapeKind::Triangle { material, .. }
             | ShapeKind::Parallelogram { material, .. }
+            | ShapeKind::Polygon { material, .. }
             | ShapeKind::Polyhedron { material, .. }
             | ShapeKind::Mesh { material, .. } => Some(material),
             ShapeKind::Csg { .. } | ShapeKind::Instance { .. } => None,
@@ -460,6 +466,14 @@ pub enum ShapeKind {
         edge1: Vec3,
         /// The second edge w.
         edge2: Vec3,
+    },
+    /// `polygon(MAT, [p1], [p2], [p3], …)`: a convex polygon, vertices in world space, in
+    /// order (the builder checks that they are coplanar and convex).
+    Polygon {
+        /// The material.
+        material: MaterialRef,
+        /// The vertices (at least three), with the position of each.
+        vertices: Vec<(Point3, Pos)>,
     },
     /// `polyhedron(MAT, T, [n1], d1, …)`: the convex intersection of the half-spaces
     /// n·x ≤ d, then T (the builder checks that it is bounded).

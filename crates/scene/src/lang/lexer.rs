@@ -75,7 +75,7 @@ impl fmt::Display for Token {
 }
 
 /// The symbols that form a token by themselves.
-const SYMBOLS: &str = "()[]<>,*-+";
+const SYMBOLS: &str = "()[]<>,*-+/";
 
 /// A lexer over a source text, producing tokens one at a time.
 pub struct Lexer<'a> {

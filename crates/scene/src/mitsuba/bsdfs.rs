@@ -334,8 +334,8 @@ impl<'t> Loader<'t> {
         Ok((scale, offset))
     }
 
-    /// The image `name` (resolved against the scene's folder), linear RGB. PNGs are sRGB-decoded
-    /// unless `raw` (Mitsuba's `raw="true"` keeps the stored values).
+    /// The image `name` (resolved against the scene's folder), linear RGB. 8-bit images (PNG, JPEG, …)
+    /// are sRGB-decoded unless `raw` (Mitsuba's `raw="true"` keeps the stored values).
     pub(super) fn image(
         &mut self,
         name: &str,
@@ -352,10 +352,7 @@ impl<'t> Loader<'t> {
         if img.width() == 0 || img.height() == 0 {
             return Err(self.err(pos, format!("image '{name}' is empty")));
         }
-        let is_png = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-        if raw && is_png {
+        if raw && candela_imageio::is_srgb_encoded(&path) {
             for px in img.pixels_mut() {
                 *px = px.map(candela_imageio::tonemap::srgb_oetf);
             }

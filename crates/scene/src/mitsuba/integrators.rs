@@ -28,9 +28,29 @@ impl<'t> Loader<'t> {
                 p.ignore(&["emitter_samples", "bsdf_samples", "shading_samples"]);
                 (2, 5)
             }
+            // Mitsuba's `moment` renders its nested integrators and adds their second moments
+            // as AOVs: candela renders the first one, as that integrator.
+            "moment" => {
+                let nested = p.objects("integrator");
+                let Some(&(first, _)) = nested.first() else {
+                    return Err(self.err(e.pos, "integrator 'moment' needs a nested <integrator>"));
+                };
+                self.warn(
+                    e.pos,
+                    format!(
+                        "integrator 'moment': rendering its first nested integrator '{}' (no moment AOVs){}",
+                        first.kind(),
+                        if nested.len() > 1 { "; the other nested integrators are ignored" } else { "" }
+                    ),
+                );
+                self.finish(&p);
+                return self.integrator(first);
+            }
             other => {
-                self.warn(e.pos, format!("integrator '{other}' is not supported: the path tracer is suggested instead"));
-                return Ok(());
+                return Err(self.err(
+                    e.pos,
+                    format!("unsupported integrator '{other}' (supported: path, volpath, volpathmis, prb, prbvolpath, ptracer (as path), direct, direct_projective, moment)"),
+                ));
             }
         };
         self.hints.integrator = Some("path".into());

@@ -16,8 +16,9 @@
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`,
 //!   `roughplastic` (all one-sided) and `twosided`; textures `bitmap` and `checkerboard`;
 //! - emitters `point`, `spot`, `directional`, `constant`, `envmap`;
-//! - integrators `path` and its equivalents without media (`volpath`, …) and `direct` (the path
-//!   tracer limited to depth 2), which become [`RenderHints`].
+//! - integrators `path` and its equivalents without media (`volpath`, …), `direct` (the path
+//!   tracer limited to depth 2) and `moment` (its first nested integrator), which become
+//!   [`RenderHints`]; `<include>` (see `include`); `serialized` meshes.
 //!
 //! Unknown parameters are warnings with their position; unknown plugins, and features whose
 //! absence would change the image, are errors at their position.
@@ -31,13 +32,15 @@
 //!   interpolated one, Mitsuba on the side of the interpolated normal (only silhouettes differ);
 //! - a sphere whose `to_world` scales non-uniformly stays round, as in Mitsuba, but its uv follow
 //!   the rotation of the polar decomposition instead of Mitsuba's inverse `to_world`;
-//! - films are filtered with a box (warning otherwise), crop windows are ignored (warnings);
+//! - reconstruction filters are importance-sampled (no splatting; Gaussian when the film names
+//!   none, as in Mitsuba), crop windows are ignored (warnings);
 //! - colours are RGB: spectra must be single values (a flat emitted spectrum has the colour of
 //!   illuminant E, as in Mitsuba's RGB variants); conductor presets are Mitsuba's RGB values;
 //! - a scene without `<sensor>` gets a default camera (Mitsuba 3.9.1 cannot render it).
 
 mod bsdfs;
 mod emitters;
+mod include;
 mod integrators;
 mod math;
 mod presets;
@@ -46,6 +49,7 @@ mod sensor;
 mod shapes;
 mod xml;
 
+use self::include::{Expander, Sources};
 use self::math::M4;
 use self::props::Props;
 use self::xml::Element;
@@ -70,7 +74,31 @@ pub fn load_mitsuba(
     opts: &LoadOptions,
 ) -> Result<LoadedScene, SceneError> {
     let src = SourceFile::new(path, text);
-    let (root, unused_defines) = xml::parse(&src, &opts.defines)?;
+    let mut sources = Sources::new(&src);
+    let (root, unused_defines) = {
+        let (mut root, unused) = xml::parse(&src, &opts.defines)?;
+        let mut ex = Expander {
+            sources: &mut sources,
+            defines: &opts.defines,
+            unused,
+        };
+        let mut stack = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
+        ex.expand(&mut root, path, &mut stack)?;
+        (root, ex.unused)
+    };
+    load_tree(src, &root, unused_defines, opts, &sources).map_err(|e| sources.remap(e))
+}
+
+/// Loads the scene whose tree (includes expanded) is `root`.
+fn load_tree(
+    src: SourceFile,
+    root: &Element,
+    unused_defines: Vec<String>,
+    opts: &LoadOptions,
+    sources: &Sources,
+) -> Result<LoadedScene, SceneError> {
+    let path = src.path.clone();
+    let path = path.as_path();
     if root.tag != "scene" {
         return Err(src.error(
             root.pos,
@@ -90,9 +118,10 @@ pub fn load_mitsuba(
         )
     })?;
     let mut ids = HashMap::new();
-    collect_ids(&root, &src, &mut ids)?;
+    collect_ids(root, &src, &mut ids)?;
     let mut l = Loader {
         src,
+        sources,
         ids,
         upgrade: major < 2,
         search: Vec::new(),
@@ -105,6 +134,7 @@ pub fn load_mitsuba(
             max_depth: Some(-1),
             rr_depth: Some(5),
             hide_emitters: false,
+            filter: Some(candela_render::filter::Filter::Gaussian { stddev: 0.5 }),
         },
         warnings: Vec::new(),
         materials: HashMap::new(),
@@ -124,7 +154,7 @@ pub fn load_mitsuba(
             path.display()
         ));
     }
-    l.scene_element(&root)?;
+    l.scene_element(root)?;
     let Loader {
         scene,
         hints,
@@ -225,10 +255,14 @@ struct Loader<'t> {
     /// Texture element → texture.
     textures: HashMap<usize, Texture>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
-    meshes: HashMap<PathBuf, Arc<Mesh>>,
+    /// Mesh files (serialized ones as `file/@index`) → the mesh and whether the file asks for
+    /// face normals.
+    meshes: HashMap<PathBuf, Arc<(Mesh, bool)>>,
     /// Elements being built (to report circular references).
     active: Vec<usize>,
     has_sensor: bool,
+    /// The main file and the included ones, to place positions in their file.
+    sources: &'t Sources,
     triangles: usize,
     mesh_bytes: f64,
 }
@@ -239,11 +273,8 @@ impl<'t> Loader<'t> {
     }
 
     fn warn(&mut self, pos: Pos, msg: impl AsRef<str>) {
-        self.warnings.push(format!(
-            "{}:{pos}: {}",
-            self.src.path.display(),
-            msg.as_ref()
-        ));
+        self.warnings
+            .push(format!("{}: {}", self.sources.describe(pos), msg.as_ref()));
     }
 
     /// The properties of `e`.

@@ -8,6 +8,7 @@ use super::Loader;
 use crate::error::SceneError;
 use crate::loaded::RenderHints;
 use candela_render::camera::{Camera, Lens};
+use candela_render::filter::Filter;
 use candela_render::math::Transform;
 
 impl<'t> Loader<'t> {
@@ -26,7 +27,8 @@ impl<'t> Loader<'t> {
         if let Some((film, _)) = p.object("film")? {
             (width, height) = self.film(film)?;
         } else {
-            self.warn(e.pos, "no <film>: Mitsuba's default 768×576 film (candela filters with a box, Mitsuba with a Gaussian)");
+            self.warn(e.pos, "no <film>: Mitsuba's default 768×576 film");
+            self.hints.filter = Some(Filter::Gaussian { stddev: 0.5 });
         }
         if let Some((s, _)) = p.object("sampler")? {
             let sp = self.props(s)?;
@@ -170,6 +172,39 @@ impl<'t> Loader<'t> {
         Ok(x)
     }
 
+    /// `<rfilter>`: Mitsuba's reconstruction filters with their parameters and defaults.
+    fn rfilter(&mut self, e: &'t Element) -> Result<Filter, SceneError> {
+        let p = self.props(e)?;
+        let filter = match e.kind() {
+            "box" => Filter::Box,
+            "tent" => Filter::Tent {
+                radius: p.number_in("radius", 1.0, (1e-3, 64.0))? as f32,
+            },
+            "gaussian" => Filter::Gaussian {
+                stddev: p.number_in("stddev", 0.5, (1e-3, 16.0))? as f32,
+            },
+            "mitchell" => Filter::Mitchell {
+                b: p.number_in("B", 1.0 / 3.0, (-100.0, 100.0))? as f32,
+                c: p.number_in("C", 1.0 / 3.0, (-100.0, 100.0))? as f32,
+            },
+            "catmullrom" => Filter::Mitchell { b: 0.0, c: 0.5 },
+            "lanczos" => Filter::Lanczos {
+                lobes: p.int_in("lobes", 3, (1, 64))? as u32,
+            },
+            other => {
+                return Err(self.err(
+                    e.pos,
+                    format!(
+                        "unknown reconstruction filter '{other}' (expected one of: {})",
+                        candela_render::filter::FILTER_NAMES.join(", ")
+                    ),
+                ))
+            }
+        };
+        self.finish(&p);
+        Ok(filter)
+    }
+
     /// `<film>`: its size.
     fn film(&mut self, e: &'t Element) -> Result<(u32, u32), SceneError> {
         let p = self.props(e)?;
@@ -197,11 +232,10 @@ impl<'t> Loader<'t> {
                 "crop windows are not supported: the whole film is rendered",
             );
         }
-        match p.object("rfilter")? {
-            Some((f, _)) if f.kind() == "box" => {}
-            Some((f, pos)) => self.warn(pos, format!("reconstruction filter '{}': candela uses a box filter (a slightly sharper image)", f.kind())),
-            None => self.warn(e.pos, "no <rfilter>: Mitsuba's default is a Gaussian filter, candela uses a box filter (a slightly sharper image)"),
-        }
+        self.hints.filter = Some(match p.object("rfilter")? {
+            Some((f, _)) => self.rfilter(f)?,
+            None => Filter::Gaussian { stddev: 0.5 },
+        });
         p.ignore(&[
             "pixel_format",
             "component_format",

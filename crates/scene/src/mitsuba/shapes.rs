@@ -122,17 +122,31 @@ impl<'t> Loader<'t> {
                     Built::Shape(Shape::Cube(Cube::new(t)))
                 }
             }
-            kind @ ("obj" | "ply") => {
+            kind @ ("obj" | "ply" | "serialized") => {
                 let (name, pos) = p.get::<String>("filename")?.ok_or_else(|| p.error(e.pos, format!("{kind} needs a 'filename'")))?;
                 let path = self.resolve(&name);
-                let loaded = match self.meshes.get(&path) {
+                let index = if kind == "serialized" { p.int_in("shape_index", 0, (0, u32::MAX as i64))? as u32 } else { 0 };
+                let key = if kind == "serialized" { path.join(format!("@{index}")) } else { path.clone() };
+                let loaded = match self.meshes.get(&key) {
                     Some(m) => m.clone(),
                     None => {
-                        let m = Arc::new(crate::mesh::load_mesh(&path, &Transform::IDENTITY).map_err(|msg| self.err(pos, msg))?);
-                        self.meshes.insert(path, m.clone());
+                        let m = if kind == "serialized" {
+                            let s = crate::serialized::load_serialized(&path, index).map_err(|msg| self.err(pos, msg))?;
+                            let mut m = s.mesh;
+                            let face_normals = s.flags & crate::serialized::FACE_NORMALS != 0;
+                            if face_normals {
+                                m.normals.clear();
+                            }
+                            (m, face_normals)
+                        } else {
+                            (crate::mesh::load_mesh(&path, &Transform::IDENTITY).map_err(|msg| self.err(pos, msg))?, false)
+                        };
+                        let m = Arc::new(m);
+                        self.meshes.insert(key, m.clone());
                         m
                     }
                 };
+                let (loaded, file_face_normals) = (&loaded.0, loaded.1);
                 let mut mesh = (*loaded).clone();
                 if kind == "obj" && !p.or("flip_tex_coords", true)? {
                     // candela's OBJ reader already flips v, as Mitsuba does by default.
@@ -140,7 +154,7 @@ impl<'t> Loader<'t> {
                         uv.y = 1.0 - uv.y;
                     }
                 }
-                if p.or("face_normals", false)? {
+                if p.or("face_normals", false)? || file_face_normals {
                     mesh.normals.clear();
                 } else if mesh.normals.is_empty() {
                     mesh.normals = vertex_normals(&mesh);
@@ -154,11 +168,10 @@ impl<'t> Loader<'t> {
                 }
                 Built::Mesh(mesh)
             }
-            "serialized" => return Err(p.error(e.pos, "Mitsuba's serialized meshes are not supported: convert them to PLY or OBJ")),
             other => {
                 return Err(p.error(
                     e.pos,
-                    format!("unsupported shape '{other}' (supported: sphere, rectangle, disk, cube, obj, ply)"),
+                    format!("unsupported shape '{other}' (supported: sphere, rectangle, disk, cube, obj, ply, serialized)"),
                 ))
             }
         };

@@ -96,6 +96,7 @@ fn total_area(scene: &Scene) -> f32 {
     for o in geo.objects() {
         a += match &o.shape {
             Shape::Parallelogram(p) => p.area(),
+            Shape::Polygon(p) => p.area(),
             Shape::Cube(c) => c.face_areas().iter().sum(),
             Shape::Plane(_) => 0.0,
             Shape::Sphere(_) | Shape::Disk(_) | Shape::Polyhedron(_) => {
@@ -443,7 +444,8 @@ impl Meshing {
                     }
                 }
             }
-            Shape::Csg(_) => {}
+            // Polygons, like CSG, get no patches (radiosity leaves them black).
+            Shape::Csg(_) | Shape::Polygon(_) => {}
         }
     }
 

@@ -28,6 +28,7 @@ const RESERVED_SHAPE_NAMES: &[&str] = &[
     "float",
     "material",
     "camera",
+    "filter",
     "shape",
     "point_light",
     "spot_light",
@@ -40,6 +41,7 @@ const RESERVED_SHAPE_NAMES: &[&str] = &[
     "box",
     "triangle",
     "parallelogram",
+    "polygon",
     "polyhedron",
     "mesh",
     "union",
@@ -285,6 +287,7 @@ impl<'s> Parser<'s> {
                 "float" => self.float_statement()?,
                 "material" => self.material_statement()?,
                 "camera" => self.camera_statement()?,
+                "filter" => self.filter_statement()?,
                 "shape" => self.shape_statement()?,
                 "point_light" | "spot_light" | "distant_light" | "hemisphere_light" => {
                     let light = self.light(&word)?;
@@ -418,6 +421,67 @@ impl<'s> Parser<'s> {
             },
         )?;
         self.desc.camera = Some(camera);
+        Ok(())
+    }
+
+    /// `filter(NAME [, parameters])`: the reconstruction filter, with Mitsuba's names and
+    /// defaults.
+    fn filter_statement(&mut self) -> PResult<()> {
+        use candela_render::filter::{Filter, FILTER_NAMES};
+        let pos = self.tok.pos;
+        if let Some((_, first)) = &self.desc.filter {
+            return Err(self.error(
+                pos,
+                format!("a second filter (the filter is already defined at {first})"),
+            ));
+        }
+        self.advance()?;
+        const SYNTAX: &str = "filter(box | tent [, radius] | gaussian [, stddev] | mitchell [, B, C] | catmullrom | lanczos [, lobes])";
+        let filter = self.args(SYNTAX, |p, a| {
+            let (name, name_pos) = p.arg(a, |p| p.name("a filter name"))?;
+            let Some(default) = Filter::by_name(&name) else {
+                return Err(p.error(
+                    name_pos,
+                    format!(
+                        "unknown filter '{name}' (expected one of: {})",
+                        FILTER_NAMES.join(", ")
+                    ),
+                ));
+            };
+            let filter = match default {
+                Filter::Tent { .. } if p.more(a)? => Filter::Tent {
+                    radius: p.arg(a, |p| {
+                        p.checked_number(
+                            |x| x > 1e-3 && x <= 64.0,
+                            "the radius must be in (0.001, 64]",
+                        )
+                    })?,
+                },
+                Filter::Gaussian { .. } if p.more(a)? => Filter::Gaussian {
+                    stddev: p.arg(a, |p| {
+                        p.checked_number(
+                            |x| x > 1e-3 && x <= 16.0,
+                            "the standard deviation must be in (0.001, 16]",
+                        )
+                    })?,
+                },
+                Filter::Mitchell { .. } if name == "mitchell" && p.more(a)? => Filter::Mitchell {
+                    b: p.arg(a, Self::number)?,
+                    c: p.arg(a, Self::number)?,
+                },
+                Filter::Lanczos { .. } if p.more(a)? => Filter::Lanczos {
+                    lobes: p.arg(a, |p| {
+                        p.checked_number(
+                            |x| (1.0..=64.0).contains(&x) && x.fract() == 0.0,
+                            "the number of lobes must be a whole number from 1 to 64",
+                        )
+                    })? as u32,
+                },
+                f => f,
+            };
+            Ok(filter)
+        })?;
+        self.desc.filter = Some((filter, pos));
         Ok(())
     }
 

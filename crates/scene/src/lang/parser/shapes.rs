@@ -5,6 +5,9 @@ use super::{csg_op, Args, PResult, Parser, PendingCsg, MAX_DEPTH, RESERVED_SHAPE
 use crate::lang::ast::*;
 use candela_render::math::Transform;
 
+/// The most vertices a `polygon` may have.
+pub const MAX_POLYGON_VERTICES: usize = 4096;
+
 impl Parser<'_> {
     /// A shape expression. CSG operations are parsed with an explicit stack, not by recursion,
     /// and may nest up to [`MAX_DEPTH`] levels.
@@ -117,6 +120,23 @@ impl Parser<'_> {
                         p.arg(a, Self::point)?,
                     ],
                 })
+            }),
+            "polygon" => self.args("polygon(material, [p1], [p2], [p3], …)", |p, a| {
+                let material = p.arg(a, Self::material_ref)?;
+                let mut vertices = Vec::new();
+                while vertices.len() < 3 || p.more(a)? {
+                    if vertices.len() >= MAX_POLYGON_VERTICES {
+                        return Err(p.error(
+                            p.tok.pos,
+                            format!("a polygon has at most {MAX_POLYGON_VERTICES} vertices"),
+                        ));
+                    }
+                    vertices.push(p.arg(a, |p| {
+                        let pos = p.tok.pos;
+                        Ok((p.point()?, pos))
+                    })?);
+                }
+                Ok(ShapeKind::Polygon { material, vertices })
             }),
             "parallelogram" => self.args("parallelogram(material, [p], [v], [w])", |p, a| {
                 Ok(ShapeKind::Parallelogram {

@@ -8,22 +8,105 @@ use candela_render::math::{Matrix4, Point3, Transform, Vec3};
 use candela_render::Rgb;
 
 impl Parser<'_> {
-    /// `[+|-] (LITERAL_NUMBER | IDENTIFIER)`.
+    /// A number: an arithmetic expression of literals, `float` variables and `pi` with
+    /// `+ - * /`, parentheses and unary signs (the usual precedence, left to right); the
+    /// result must be finite.
     pub(super) fn number(&mut self) -> PResult<f32> {
-        let negate = self.tok.is_symbol('-');
-        if negate || self.tok.is_symbol('+') {
+        let pos = self.tok.pos;
+        let value = self.sum(0)?;
+        if !value.is_finite() {
+            return Err(self.error(
+                pos,
+                format!("the expression is not a finite number ({value})"),
+            ));
+        }
+        Ok(value)
+    }
+
+    /// The current token when it is a number literal written with a sign (`-4`, `+4`): in an
+    /// expression it is a binary `-`/`+` followed by the number (the lexer keeps the sign on
+    /// the number, as the course's lexer does).
+    fn signed_literal(&self) -> Option<f32> {
+        match self.tok.kind {
+            TokenKind::Number(v) if self.tok.text.starts_with(['-', '+']) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// `product (('+' | '-') product)*`.
+    fn sum(&mut self, depth: usize) -> PResult<f32> {
+        let mut acc = self.product(depth)?;
+        loop {
+            if let Some(v) = self.signed_literal() {
+                // `a -4 * b` is `a + (-4) * b`.
+                self.advance()?;
+                let rest = self.product_from(v, depth)?;
+                acc += rest;
+            } else if self.tok.is_symbol('+') || self.tok.is_symbol('-') {
+                let minus = self.tok.is_symbol('-');
+                self.advance()?;
+                let rhs = self.product(depth)?;
+                acc = if minus { acc - rhs } else { acc + rhs };
+            } else {
+                return Ok(acc);
+            }
+        }
+    }
+
+    /// `unary (('*' | '/') unary)*`.
+    fn product(&mut self, depth: usize) -> PResult<f32> {
+        let first = self.unary(depth)?;
+        self.product_from(first, depth)
+    }
+
+    /// The rest of a product whose first factor is `acc`.
+    fn product_from(&mut self, mut acc: f32, depth: usize) -> PResult<f32> {
+        loop {
+            if self.tok.is_symbol('*') {
+                self.advance()?;
+                acc *= self.unary(depth)?;
+            } else if self.tok.is_symbol('/') {
+                self.advance()?;
+                let pos = self.tok.pos;
+                let d = self.unary(depth)?;
+                if d == 0.0 {
+                    return Err(self.error(pos, "division by zero"));
+                }
+                acc /= d;
+            } else {
+                return Ok(acc);
+            }
+        }
+    }
+
+    /// `('+' | '-') unary | '(' sum ')' | LITERAL_NUMBER | IDENTIFIER | 'pi'`.
+    fn unary(&mut self, depth: usize) -> PResult<f32> {
+        if depth > super::MAX_DEPTH {
+            return Err(self.error(self.tok.pos, "the expression is nested too deeply"));
+        }
+        if self.tok.is_symbol('-') || self.tok.is_symbol('+') {
+            let negate = self.tok.is_symbol('-');
             self.advance()?;
+            let v = self.unary(depth + 1)?;
+            return Ok(if negate { -v } else { v });
+        }
+        if self.tok.is_symbol('(') {
+            self.advance()?;
+            let v = self.sum(depth + 1)?;
+            self.expect_symbol(')')?;
+            return Ok(v);
         }
         let value = match &self.tok.kind {
             TokenKind::Number(v) => *v,
             TokenKind::Ident(name) => match self.desc.floats.get(name) {
                 Some(&v) => v,
+                None if name == "pi" => std::f32::consts::PI,
                 None => return Err(self.error(self.tok.pos, format!("unknown variable '{name}'"))),
             },
             _ => return Err(self.unexpected("a number")),
         };
         self.advance()?;
-        Ok(if negate { -value } else { value })
+        Ok(value)
     }
 
     /// A number satisfying `ok`, else the error `message` at the number.
