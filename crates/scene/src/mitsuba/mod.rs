@@ -10,7 +10,7 @@
 //! - sensors `perspective` (`fov`/`focal_length`, `fov_axis`; Mitsuba's camera frame: +z forward,
 //!   +y up, +x to the left of the image), `thinlens` (depth of field), `orthographic`; film
 //!   `hdrfilm` (`width`, `height`), any sampler (`sample_count`);
-//! - shapes `sphere`, `rectangle`, `disk`, `cube`, `obj`, `ply` with `to_world`, `flip_normals`,
+//! - shapes `sphere`, `rectangle`, `disk`, `cube`, `cylinder`, `obj`, `ply`, `serialized` with `to_world`, `flip_normals`,
 //!   `face_normals`, a BSDF (Mitsuba's default: one-sided diffuse 0.5) and an `area` emitter
 //!   (one-sided, on the side of the normal);
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`,
