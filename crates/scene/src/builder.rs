@@ -263,6 +263,7 @@ impl Builder<'_> {
                             radius: 0.0,
                             attenuation: att(attenuation),
                         },
+                        pattern: None,
                     },
                     components,
                 ),

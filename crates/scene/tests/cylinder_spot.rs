@@ -1,5 +1,6 @@
-//! The cylinder in both formats: Mitsuba's `p0`, `p1`, `radius` (folded into the placement),
-//! the candela language's `cylinder(MAT, T)`, checked by rays with hand-computed hits.
+//! The cylinder in both formats (Mitsuba's `p0`, `p1`, `radius` folded into the placement,
+//! the candela language's `cylinder(MAT, T)`), checked by rays with hand-computed hits; Mitsuba
+//! spot lights with a projected texture.
 
 mod support;
 
@@ -58,4 +59,27 @@ fn the_candela_language_has_cylinders() {
     );
     let e = candela_scene::builder::build_scene(&d, Default::default()).unwrap_err();
     assert!(e.message.contains("CSG operands must be solids"), "{e}");
+}
+
+/// A spot light's projected texture: the quadrants of a checkerboard along directions in the
+/// light's frame (uv = ½ + ½·(x, y)/(z·tan cut-off)).
+#[test]
+fn mitsuba_spot_lights_project_their_texture() {
+    use candela_render::light::Light;
+    use candela_render::Rgb;
+    let l = load(&scene(
+        r#"<emitter type="spot"><float name="cutoff_angle" value="45"/>
+  <texture type="checkerboard" name="texture"><rgb name="color0" value="1, 0, 0"/><rgb name="color1" value="0, 0, 1"/></texture>
+</emitter>"#,
+    ));
+    let Some(Light::Spot(spot, _)) = l.scene.lights.first() else {
+        panic!("no spot light");
+    };
+    // Axis +z, frame x, y: tan 45° = 1, so w = (0.2, 0.2, 1) looks up uv = (0.6, 0.6).
+    let w = |x: f32, y: f32| Vec3::new(x, y, 1.0).normalize();
+    assert_eq!(spot.pattern(w(0.2, 0.2)), Rgb::new(1.0, 0.0, 0.0));
+    assert_eq!(spot.pattern(w(-0.2, -0.2)), Rgb::new(1.0, 0.0, 0.0));
+    assert_eq!(spot.pattern(w(0.2, -0.2)), Rgb::new(0.0, 0.0, 1.0));
+    // Behind the light: nothing.
+    assert_eq!(spot.pattern(Vec3::new(0.0, 0.0, -1.0)), Rgb::BLACK);
 }
