@@ -37,6 +37,12 @@
 //! - colours are RGB: spectra must be single values (a flat emitted spectrum has the colour of
 //!   illuminant E, as in Mitsuba's RGB variants); conductor presets are Mitsuba's RGB values;
 //! - a scene without `<sensor>` gets a default camera (Mitsuba 3.9.1 cannot render it).
+//! - JPEG textures are decoded by `zune-jpeg`, Mitsuba uses libjpeg: texels differ by up to
+//!   ~2 % of full scale (rounding, chroma upsampling), seen as ≲1 % differences where such a
+//!   texture dominates;
+//! - negative-lobed filters (`mitchell`, `catmullrom`, `lanczos`) are evaluated exactly, Mitsuba
+//!   splats with a tabulated filter: a few percent at sharp edges; and Mitsuba's border pixels
+//!   see no samples outside the film, candela's do.
 
 mod bsdfs;
 mod emitters;
