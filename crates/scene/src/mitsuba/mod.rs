@@ -40,9 +40,11 @@
 //! - JPEG textures are decoded by `zune-jpeg`, Mitsuba uses libjpeg: texels differ by up to
 //!   ~2 % of full scale (rounding, chroma upsampling), seen as ≲1 % differences where such a
 //!   texture dominates;
-//! - negative-lobed filters (`mitchell`, `catmullrom`, `lanczos`) are evaluated exactly, Mitsuba
-//!   splats with a tabulated filter: a few percent at sharp edges; and Mitsuba's border pixels
-//!   see no samples outside the film, candela's do.
+//! - reconstruction filters are importance-sampled (each sample stays in its pixel; its
+//!   expectation is the normalised filter's convolution, checked against analytic edges), Mitsuba
+//!   splats samples and divides by the weights' sum: images agree in the mean, negative-lobed
+//!   filters differ by up to ~1 % of the peak at sharp edges and are noisier in candela; Mitsuba's
+//!   border pixels see no samples outside the film, candela's do.
 
 mod bsdfs;
 mod emitters;
