@@ -15,8 +15,8 @@ use candela_render::material::{Distribution, Lobe, Material, MaterialId, Microfa
 use candela_render::math::{Transform, Vec3};
 use candela_render::scene::SceneBuilder;
 use candela_render::shape::{
-    Csg, CsgNode, CsgOp, Cube, Mesh, Parallelogram, Plane, Polygon, PolygonError, Polyhedron,
-    Shape, Solid, Sphere,
+    Csg, CsgNode, CsgOp, Cube, Cylinder, Mesh, Parallelogram, Plane, Polygon, PolygonError,
+    Polyhedron, Shape, Solid, Sphere,
 };
 use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene};
@@ -264,6 +264,7 @@ impl Builder<'_> {
                             radius: 0.0,
                             attenuation: att(attenuation),
                         },
+                        pattern: None,
                     },
                     components,
                 ),
@@ -396,6 +397,15 @@ impl Builder<'_> {
                 let (m, e) = self.props(material);
                 let t = place(self, transform)?;
                 self.scene.add_shape(Shape::Plane(Plane::new(t)), m, e);
+            }
+            ShapeKind::Cylinder {
+                material,
+                transform,
+            } => {
+                let (m, e) = self.props(material);
+                let t = place(self, transform)?;
+                self.scene
+                    .add_shape(Shape::Cylinder(Cylinder::new(t)), m, e);
             }
             ShapeKind::Box {
                 material,
@@ -578,9 +588,9 @@ impl Builder<'_> {
                 let named = &self.desc.named_shape(*index).shape;
                 self.csg(named, &t, nodes, depth + 1)
             }
-            ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } | ShapeKind::Polygon { .. } => Err(self.err(
+            ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } | ShapeKind::Polygon { .. } | ShapeKind::Cylinder { .. } => Err(self.err(
                 shape.pos,
-                "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles, parallelograms and polygons enclose no volume",
+                "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles, parallelograms, polygons and (open) cylinders enclose no volume",
             )),
         }
     }

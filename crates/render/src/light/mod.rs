@@ -17,7 +17,7 @@ mod point;
 pub use area::{AreaLight, AreaShape};
 pub use emission::Emission;
 pub use infinite::{Environment, HemisphereLight};
-pub use point::{Falloff, PointLight, SpotLight, SpotProfile};
+pub use point::{Falloff, PointLight, SpotLight, SpotPattern, SpotProfile};
 
 use crate::color::Rgb;
 use crate::geometry::Geometry;
@@ -190,7 +190,7 @@ impl Light {
                 let wi = to / d;
                 LightSample {
                     wi,
-                    li: l.intensity * (l.falloff.scale(d) * l.profile(-wi)),
+                    li: l.intensity * l.pattern(-wi) * (l.falloff.scale(d) * l.profile(-wi)),
                     pdf: 1.0,
                     delta: true,
                     target: Target::Point(l.position),

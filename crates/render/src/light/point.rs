@@ -1,4 +1,5 @@
-//! Point and spot lights (Dirac deltas in position).
+//! Point and spot lights (Dirac deltas in position); a spot may project a texture
+//! ([`SpotPattern`], Mitsuba's `spot` with a `texture`).
 //!
 //! Scene syntax:
 //! - `point_light([pos], <I>, r [, attenuation(c1, c2, c3)] [, components(…)])`: the intensity
@@ -11,7 +12,8 @@
 //!   between beam width and cut-off, and follows the inverse-square law.
 
 use crate::color::Rgb;
-use crate::math::{Point3, Vec3};
+use crate::math::{Point2, Point3, Vec3};
+use crate::texture::Texture;
 
 /// How a light's contribution decreases with distance.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -66,8 +68,23 @@ pub struct PointLight {
     pub falloff: Falloff,
 }
 
+/// A texture projected by a spot light (Mitsuba's `spot` with a `texture`): the direction `w`
+/// leaving the light, in the light's frame (x, y, axis), looks the texture up at
+/// uv = ½ + ½·(w·x, w·y) / ((w·axis)·tan(cut-off)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpotPattern {
+    /// The light's local x axis (unit, orthogonal to the axis).
+    pub x: Vec3,
+    /// The light's local y axis.
+    pub y: Vec3,
+    /// tan of the cut-off angle.
+    pub uv_factor: f32,
+    /// The texture (multiplies the intensity).
+    pub texture: Texture,
+}
+
 /// A spot light.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SpotLight {
     /// Position.
     pub position: Point3,
@@ -81,9 +98,26 @@ pub struct SpotLight {
     pub profile: SpotProfile,
     /// Distance fall-off.
     pub falloff: Falloff,
+    /// A projected texture, if any.
+    pub pattern: Option<Box<SpotPattern>>,
 }
 
 impl SpotLight {
+    /// The projected texture's colour along the unit direction `w` leaving the light (white
+    /// without a texture).
+    #[inline]
+    pub fn pattern(&self, w: Vec3) -> Rgb {
+        let Some(p) = &self.pattern else {
+            return Rgb::WHITE;
+        };
+        let z = w.dot(self.axis) * p.uv_factor;
+        if !(z > 0.0) {
+            return Rgb::BLACK;
+        }
+        let uv = Point2::new(0.5 + 0.5 * w.dot(p.x) / z, 0.5 + 0.5 * w.dot(p.y) / z);
+        p.texture.eval(uv)
+    }
+
     /// The angular factor for the unit direction `w` leaving the light.
     #[inline]
     pub fn profile(&self, w: Vec3) -> f32 {
@@ -143,6 +177,7 @@ mod tests {
             intensity: Rgb::WHITE,
             cos_cutoff: 30f32.to_radians().cos(),
             profile: SpotProfile::Power(2.0),
+            pattern: None,
             falloff: Falloff::default(),
         };
         assert_eq!(s.profile(Vec3::Z), 1.0);

@@ -10,6 +10,7 @@
 
 mod csg;
 mod cube;
+mod cylinder;
 mod disk;
 mod mesh;
 mod parallelogram;
@@ -20,6 +21,7 @@ mod sphere;
 
 pub use csg::{Csg, CsgNode, CsgOp, Solid};
 pub use cube::Cube;
+pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use mesh::{intersect_triangle, Mesh, ShearedRay};
 pub use parallelogram::Parallelogram;
@@ -79,6 +81,8 @@ pub enum Shape {
     Polygon(Polygon),
     /// The unit disk, transformed.
     Disk(Disk),
+    /// The open unit cylinder (radius 1, z from 0 to 1), transformed.
+    Cylinder(Cylinder),
     /// A CSG tree.
     Csg(Box<Csg>),
 }
@@ -95,6 +99,7 @@ impl Shape {
             Shape::Polyhedron(p) => p.intersect(ray),
             Shape::Polygon(p) => p.intersect(ray),
             Shape::Disk(d) => d.intersect(ray),
+            Shape::Cylinder(c) => c.intersect(ray),
             Shape::Csg(c) => c.intersect(ray),
         }
     }
@@ -109,6 +114,7 @@ impl Shape {
             Shape::Polyhedron(p) => p.geometry(ray, hit.t, hit.sub),
             Shape::Polygon(p) => p.geometry(hit.uv[0], hit.uv[1]),
             Shape::Disk(d) => d.geometry(hit.uv[0], hit.uv[1]),
+            Shape::Cylinder(c) => c.geometry(ray, hit.t),
             Shape::Csg(c) => c.geometry(ray, hit),
         }
     }
@@ -131,6 +137,7 @@ impl Shape {
             Shape::Polyhedron(p) => Some(p.bounds()),
             Shape::Polygon(p) => Some(p.bounds()),
             Shape::Disk(d) => Some(d.bounds()),
+            Shape::Cylinder(c) => Some(c.bounds()),
             Shape::Csg(c) => Some(c.bounds()),
         }
     }

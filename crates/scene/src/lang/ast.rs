@@ -399,6 +399,7 @@ impl Shape {
             ShapeKind::Sphere { transform, .. }
             | ShapeKind::Plane { transform, .. }
             | ShapeKind::Box { transform, .. }
+            | ShapeKind::Cylinder { transform, .. }
             | ShapeKind::Polyhedron { transform, .. }
             | ShapeKind::Mesh { transform, .. }
             | ShapeKind::Csg { transform, .. }
@@ -415,6 +416,7 @@ impl Shape {
             ShapeKind::Sphere { material, .. }
             | ShapeKind::Plane { material, .. }
             | ShapeKind::Box { material, .. }
+            | ShapeKind::Cylinder { material, .. }
             | ShapeKind::Triangle { material, .. }
             | ShapeKind::Parallelogram { material, .. }
             | ShapeKind::Polygon { material, .. }
@@ -444,6 +446,14 @@ pub enum ShapeKind {
     },
     /// `box(MAT, T)`: the cube [-1, 1]³, then T.
     Box {
+        /// The material.
+        material: MaterialRef,
+        /// The placement.
+        transform: Transform,
+    },
+    /// `cylinder(MAT, T)`: the open cylinder of radius 1 around the z axis, z from 0 to 1,
+    /// then T.
+    Cylinder {
         /// The material.
         material: MaterialRef,
         /// The placement.

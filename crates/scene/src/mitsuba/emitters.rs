@@ -6,7 +6,8 @@ use super::xml::Element;
 use super::Loader;
 use crate::error::SceneError;
 use candela_render::light::{
-    Components, DistantLight, Environment, Falloff, Light, PointLight, SpotLight, SpotProfile,
+    Components, DistantLight, Environment, Falloff, Light, PointLight, SpotLight, SpotPattern,
+    SpotProfile,
 };
 use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::texture::{Filter, ImageTexture, Texture, Wrap};
@@ -39,10 +40,17 @@ impl<'t> Loader<'t> {
                 } else {
                     let cutoff = p.number_in("cutoff_angle", 20.0, (0.0, 180.0))?;
                     let beam = p.number_in("beam_width", cutoff * 0.75, (0.0, cutoff))?;
-                    if p.has("texture") {
-                        return Err(p.error(p.pos("texture"), "spot lights with a texture are not supported"));
-                    }
                     let axis = unit(m.vector([0.0, 0.0, 1.0])).ok_or_else(|| p.error(p.pos("to_world"), "the spot's axis is degenerate"))?;
+                    // Mitsuba's projected texture, in the light's frame (x, y of to_world).
+                    let pattern = if p.has("texture") {
+                        let mut textured = false;
+                        let texture = self.tex(&p, "texture", 1.0, false, &mut textured)?;
+                        let x = unit(m.vector([1.0, 0.0, 0.0])).ok_or_else(|| p.error(p.pos("to_world"), "the spot's frame is degenerate"))?;
+                        let y = unit(m.vector([0.0, 1.0, 0.0])).ok_or_else(|| p.error(p.pos("to_world"), "the spot's frame is degenerate"))?;
+                        Some(Box::new(SpotPattern { x, y, uv_factor: cutoff.to_radians().tan() as f32, texture }))
+                    } else {
+                        None
+                    };
                     Light::Spot(
                         SpotLight {
                             position,
@@ -51,6 +59,7 @@ impl<'t> Loader<'t> {
                             cos_cutoff: cutoff.to_radians().cos() as f32,
                             profile: SpotProfile::Linear(beam.to_radians().cos() as f32),
                             falloff: Falloff::INVERSE_SQUARE,
+                            pattern,
                         },
                         Components::from_intensity(intensity),
                     )

@@ -19,7 +19,7 @@ use super::Loader;
 use crate::error::SceneError;
 use candela_render::light::Emission;
 use candela_render::math::{Normal3, Point2, Point3, Transform, Vec3};
-use candela_render::shape::{Cube, Disk, Mesh, Parallelogram, Shape, Sphere};
+use candela_render::shape::{Cube, Cylinder, Disk, Mesh, Parallelogram, Shape, Sphere};
 use std::sync::Arc;
 
 impl<'t> Loader<'t> {
@@ -111,6 +111,33 @@ impl<'t> Loader<'t> {
                     Some(_) => Built::Mesh(rectangle_mesh(&t, flip)),
                 }
             }
+            "cylinder" => {
+                if flip {
+                    return Err(p.error(p.pos("flip_normals"), "flip_normals on a cylinder is not supported (use a twosided BSDF to see its inside)"));
+                }
+                let p0 = p.or("p0", [0.0; 3])?;
+                let p1 = p.or("p1", [0.0, 0.0, 1.0])?;
+                let r = p.or("radius", 1.0f64)?;
+                let d = [p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]];
+                let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                if !(r > 0.0 && r.is_finite()) {
+                    return Err(p.error(p.pos("radius"), format!("the radius must be positive, not {r}")));
+                }
+                if !(len > 0.0 && len.is_finite()) {
+                    return Err(p.error(p.pos("p1"), "p0 and p1 must be distinct"));
+                }
+                // Mitsuba: to_world · translate(p0) · to_frame(d/|d|) · scale(r, r, |d|), the
+                // frame being Duff et al.'s basis around the axis (it places u's origin).
+                let n = [d[0] / len, d[1] / len, d[2] / len];
+                let sign = 1f64.copysign(n[2]);
+                let a = -1.0 / (sign + n[2]);
+                let b = n[0] * n[1] * a;
+                let sx = [1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]];
+                let sy = [b, sign + n[1] * n[1] * a, -n[1]];
+                let frame = M4::from_columns(sx, sy, n, [0.0; 3]);
+                let full = m.mul(&M4::translate(p0)).mul(&frame).mul(&M4::scale([r, r, len]));
+                Built::Shape(Shape::Cylinder(Cylinder::new(full.to_transform().ok_or_else(|| singular(self))?)))
+            }
             "disk" => {
                 let m = if flip { m.mul(&M4::scale([1.0, 1.0, -1.0])) } else { m };
                 Built::Shape(Shape::Disk(Disk::new(m.to_transform().ok_or_else(|| singular(self))?)))
@@ -171,7 +198,7 @@ impl<'t> Loader<'t> {
             other => {
                 return Err(p.error(
                     e.pos,
-                    format!("unsupported shape '{other}' (supported: sphere, rectangle, disk, cube, obj, ply, serialized)"),
+                    format!("unsupported shape '{other}' (supported: sphere, rectangle, disk, cube, cylinder, obj, ply, serialized)"),
                 ))
             }
         };

@@ -99,7 +99,7 @@ fn total_area(scene: &Scene) -> f32 {
             Shape::Polygon(p) => p.area(),
             Shape::Cube(c) => c.face_areas().iter().sum(),
             Shape::Plane(_) => 0.0,
-            Shape::Sphere(_) | Shape::Disk(_) | Shape::Polyhedron(_) => {
+            Shape::Sphere(_) | Shape::Disk(_) | Shape::Polyhedron(_) | Shape::Cylinder(_) => {
                 o.shape.bounds().map_or(0.0, |b| b.surface_area())
             }
             Shape::Csg(_) => 0.0,
@@ -444,8 +444,8 @@ impl Meshing {
                     }
                 }
             }
-            // Polygons, like CSG, get no patches (radiosity leaves them black).
-            Shape::Csg(_) | Shape::Polygon(_) => {}
+            // Polygons and cylinders, like CSG, get no patches (radiosity leaves them black).
+            Shape::Csg(_) | Shape::Polygon(_) | Shape::Cylinder(_) => {}
         }
     }
 

@@ -39,6 +39,7 @@ const RESERVED_SHAPE_NAMES: &[&str] = &[
     "sphere",
     "plane",
     "box",
+    "cylinder",
     "triangle",
     "parallelogram",
     "polygon",

@@ -97,6 +97,13 @@ impl Parser<'_> {
                     transform,
                 })
             }),
+            "cylinder" => self.args("cylinder(material, transformation)", |p, a| {
+                let (material, transform) = placed(p, a)?;
+                Ok(ShapeKind::Cylinder {
+                    material,
+                    transform,
+                })
+            }),
             "plane" => self.args("plane(material, transformation)", |p, a| {
                 let (material, transform) = placed(p, a)?;
                 Ok(ShapeKind::Plane {
