@@ -117,6 +117,8 @@ pub fn load_mitsuba(
         has_sensor: false,
         triangles: 0,
         mesh_bytes: 0.0,
+        limits: opts.limits,
+        inputs: Vec::new(),
     };
     for d in unused_defines {
         l.warnings.push(format!(
@@ -132,6 +134,7 @@ pub fn load_mitsuba(
         has_sensor,
         triangles,
         mesh_bytes,
+        inputs,
         ..
     } = l;
     let mut scene = scene.build(opts.accel);
@@ -148,6 +151,7 @@ pub fn load_mitsuba(
         warnings,
         mesh_stats: (triangles > 0).then(|| (triangles, mesh_bytes / triangles as f64)),
         local_model_terms: Vec::new(),
+        inputs,
     })
 }
 
@@ -230,6 +234,10 @@ struct Loader<'t> {
     has_sensor: bool,
     triangles: usize,
     mesh_bytes: f64,
+    /// File sizes, image pixels, mesh memory.
+    limits: candela_imageio::Limits,
+    /// The files read (meshes, images).
+    inputs: Vec<PathBuf>,
 }
 
 impl<'t> Loader<'t> {

@@ -128,11 +128,19 @@ impl<'t> Loader<'t> {
                 let loaded = match self.meshes.get(&path) {
                     Some(m) => m.clone(),
                     None => {
-                        let m = Arc::new(crate::mesh::load_mesh(&path, &Transform::IDENTITY).map_err(|msg| self.err(pos, msg))?);
+                        let m = Arc::new(crate::mesh::load_mesh(&path, &Transform::IDENTITY, &self.limits).map_err(|msg| self.err(pos, msg))?);
+                        self.inputs.push(path.clone());
                         self.meshes.insert(path, m.clone());
                         m
                     }
                 };
+                // Each placement is a copy: refused before it is made when over the limit.
+                crate::loaded::check_mesh_memory(
+                    self.mesh_bytes + crate::mesh::bytes_per_triangle(&loaded) * loaded.len() as f64,
+                    self.triangles + loaded.len(),
+                    &self.limits,
+                )
+                .map_err(|msg| self.err(pos, msg))?;
                 let mut mesh = (*loaded).clone();
                 if kind == "obj" && !p.or("flip_tex_coords", true)? {
                     // candela's OBJ reader already flips v, as Mitsuba does by default.
