@@ -84,6 +84,10 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
+    /// Memory budget in bytes (suffixes K, M, G, T): limits image size, file sizes, texture
+    /// pixels and meshes (docs/limits.md); default 2G, or half of `ulimit -v`.
+    #[arg(long, value_name = "BYTES", value_parser = crate::inputs::parse_bytes)]
+    pub max_memory: Option<u64>,
     /// Print rays traced, time and Mrays/s.
     #[arg(long)]
     pub stats: bool,
@@ -118,8 +122,11 @@ pub struct ToneArgs {
 pub struct ConvertArgs {
     /// The input image (.pfm, .exr, .hdr, .png).
     pub input: PathBuf,
-    /// The output image (.pfm, .exr, .hdr, .png).
+    /// The output image (.pfm, .exr, .hdr, .png; `-` for a PNG on standard output).
     pub output: PathBuf,
+    /// Memory budget in bytes (suffixes K, M, G, T), as for `render`.
+    #[arg(long, value_name = "BYTES", value_parser = crate::inputs::parse_bytes)]
+    pub max_memory: Option<u64>,
     /// How an LDR output is tone mapped.
     #[command(flatten)]
     pub tone: ToneArgs,

@@ -12,12 +12,12 @@ use candela_render::render::{render as render_image, RenderSettings};
 use candela_render::sampling::SamplerKind;
 use candela_scene::{LoadOptions, LoadedScene};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// `candela demo`.
 pub fn demo(args: RenderArgs) -> Result<()> {
-    let outputs = outputs(&args, Path::new("demo.png"))?;
+    let outputs = crate::outputs::resolve(&args.outputs, "demo.png");
     let opts = load_options(&args)?;
     let start = Instant::now();
     let loaded = candela_scene::demo_scene(&opts).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -26,31 +26,13 @@ pub fn demo(args: RenderArgs) -> Result<()> {
 
 /// `candela render SCENE`.
 pub fn render(a: SceneArgs) -> Result<()> {
-    let default_out = PathBuf::from(a.scene.file_stem().unwrap_or_default()).with_extension("png");
-    let outputs = outputs(&a.render, &default_out)?;
+    let default_out = crate::inputs::default_output(&a.scene);
+    let outputs = crate::outputs::resolve(&a.render.outputs, &default_out);
     let opts = load_options(&a.render)?;
     // Scene errors carry their own `file:line:col`; print them as they are.
     let start = Instant::now();
     let loaded = candela_scene::load_scene(&a.scene, &opts).map_err(|e| anyhow::anyhow!("{e}"))?;
     render_and_write(loaded, &a.render, &outputs, start.elapsed().as_secs_f64())
-}
-
-/// The output files, checked before any work so that a bad extension costs nothing.
-fn outputs(args: &RenderArgs, default: &Path) -> Result<Vec<PathBuf>> {
-    let outs = if args.outputs.is_empty() {
-        vec![default.to_path_buf()]
-    } else {
-        args.outputs.clone()
-    };
-    for o in &outs {
-        if !candela_imageio::supported_extension(o) {
-            bail!(
-                "--output '{}': unknown image format (use .png, .pfm or .exr)",
-                o.display()
-            );
-        }
-    }
-    Ok(outs)
 }
 
 /// The `--sampler` option.
@@ -87,7 +69,11 @@ fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
         }
         defines.push((name.trim().to_string(), value.trim().to_string()));
     }
-    Ok(LoadOptions { defines, accel })
+    Ok(LoadOptions {
+        defines,
+        accel,
+        limits: crate::inputs::limits(args),
+    })
 }
 
 /// Builds the tone mapping for LDR outputs, with `default_gamma` unless `--gamma` is given.
@@ -134,7 +120,7 @@ fn radiosity_options(args: &RenderArgs, kind: IntegratorKind) -> Result<Radiosit
     }
     if kind == IntegratorKind::Radiosity {
         if let Some(path) = &args.radiosity_cache {
-            match std::fs::read(path) {
+            match crate::inputs::read_cache(path, args) {
                 Ok(bytes) => o.cache = Some(bytes.into()),
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                 Err(e) => eprintln!(
@@ -184,6 +170,7 @@ fn render_and_write(
     outputs: &[PathBuf],
     load_seconds: f64,
 ) -> Result<()> {
+    crate::outputs::not_inputs(outputs, &loaded.inputs)?;
     for w in &loaded.warnings {
         eprintln!("candela: warning: {w}");
     }
@@ -226,6 +213,7 @@ fn render_and_write(
         seed: args.seed,
         sampler: sampler_kind(args)?,
     };
+    crate::inputs::check_render(settings.width, settings.height, args)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)
         .build()
@@ -253,10 +241,7 @@ fn render_and_write(
     bar.finish_and_clear();
 
     let tone = tone_map(&args.tone, RENDER_GAMMA);
-    for path in outputs {
-        candela_imageio::write_image(path, &out.image, &tone)
-            .with_context(|| format!("writing '{}'", path.display()))?;
-    }
+    crate::outputs::write_all(outputs, &out.image, &tone)?;
     if args.stats {
         eprintln!("scene loaded and built in {load_seconds:.3} s");
         if let Some((triangles, bytes)) = loaded.mesh_stats {
