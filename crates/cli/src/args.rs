@@ -64,7 +64,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "NAME")]
     pub accel: Option<String>,
     /// The seed of the random sequences (same seed, same image, any thread count).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub seed: u64,
     /// Overrides a `float` variable (or a Mitsuba `<default>`): NAME=VALUE or NAME:VALUE.
     #[arg(short = 'd', long = "define", value_name = "NAME=VALUE")]

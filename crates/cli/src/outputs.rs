@@ -1,6 +1,6 @@
 //! The output files of a run: checked before any work (format, target, not an input), then
-//! written all or none. `-` writes a PNG to standard output, `-.pfm`, `-.exr`, `-.hdr` and
-//! `-.png` that format: the way to write to a pipe or a device (a file target is only ever a
+//! written all or none. `-` writes a PNG to standard output, `pfm:-`, `exr:-`, `hdr:-` and
+//! `png:-` that format: the way to write to a pipe or a device (a file target is only ever a
 //! regular file, replaced atomically).
 
 use crate::exit::{Output, Usage};
@@ -19,13 +19,13 @@ pub fn resolve(list: &[PathBuf], default: &str) -> Vec<PathBuf> {
     }
 }
 
-/// The format of standard output when `path` names it (`-` or `-.EXT`).
+/// The format of standard output when `path` names it (`-` or `EXT:-`).
 fn stdout_format(path: &Path) -> Option<Result<Format, Usage>> {
     let s = path.to_str()?;
     if s == "-" {
         return Some(Ok(Format::Png));
     }
-    let ext = s.strip_prefix("-.")?;
+    let ext = s.strip_suffix(":-")?;
     Some(
         Format::ALL
             .into_iter()
@@ -35,7 +35,8 @@ fn stdout_format(path: &Path) -> Option<Result<Format, Usage>> {
 }
 
 /// The formats, as listed in messages.
-const FORMATS: &str = "use .png, .pfm, .exr or .hdr, or - for a PNG on standard output";
+const FORMATS: &str =
+    "use .png, .pfm, .exr or .hdr, or - (PNG) or pfm:-, exr:-, hdr:- for standard output";
 
 /// Checks the outputs before any work: known formats, at most one on standard output, no file
 /// twice, each a regular file or nothing in an existing folder, none of them one of `inputs`.
@@ -71,7 +72,10 @@ pub fn check(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> {
 /// Fails when an output is one of `inputs` (a scene, mesh, image or cache file).
 pub fn not_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> {
     for o in outputs {
-        if let Some(i) = inputs.iter().find(|i| crate::inputs::same_file(o, i)) {
+        if let Some(i) = inputs
+            .iter()
+            .find(|i| *i == o || crate::inputs::same_file(o, i))
+        {
             return Err(Usage(format!(
                 "--output '{}' is an input of this run ('{}'): refusing to overwrite it",
                 o.display(),
@@ -126,12 +130,12 @@ mod tests {
     fn standard_output_forms() {
         assert!(matches!(stdout_format(Path::new("-")), Some(Ok(Format::Png))));
         assert!(matches!(
-            stdout_format(Path::new("-.PFM")),
+            stdout_format(Path::new("PFM:-")),
             Some(Ok(Format::Pfm))
         ));
-        assert!(matches!(stdout_format(Path::new("-.bmp")), Some(Err(_))));
+        assert!(matches!(stdout_format(Path::new("bmp:-")), Some(Err(_))));
         assert!(stdout_format(Path::new("a.png")).is_none());
-        let e = check(&["-".into(), "-.exr".into()], &[]).unwrap_err();
+        let e = check(&["-".into(), "exr:-".into()], &[]).unwrap_err();
         assert!(e.0.contains("twice"), "{e}");
         let e = check(&["x.bmp".into()], &[]).unwrap_err();
         assert!(e.0.contains(".hdr"), "{e}");
