@@ -69,7 +69,11 @@ pub fn guard_standard_descriptors() {
     use std::os::fd::{AsRawFd, IntoRawFd};
     // `open` returns the lowest free descriptor: while it is one of 0, 1, 2, keep it there.
     for _ in 0..3 {
-        match std::fs::OpenOptions::new().read(true).write(true).open("/dev/null") {
+        match std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open("/dev/null")
+        {
             Ok(f) if f.as_raw_fd() <= 2 => {
                 let _ = f.into_raw_fd();
             }

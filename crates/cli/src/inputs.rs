@@ -16,34 +16,6 @@ use std::path::Path;
 /// outputs), for the estimate made before rendering.
 pub const RENDER_BYTES_PER_PIXEL: u64 = 96;
 
-/// Parses a byte count: a number with an optional suffix K, M, G or T (powers of 1024).
-pub fn parse_bytes(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let (digits, scale) = match t.char_indices().last() {
-        Some((i, c)) if c.is_ascii_alphabetic() => {
-            let scale: u64 = match c.to_ascii_uppercase() {
-                'K' => 1 << 10,
-                'M' => 1 << 20,
-                'G' => 1 << 30,
-                'T' => 1 << 40,
-                _ => return Err(format!("'{s}': unknown unit (use K, M, G or T)")),
-            };
-            (&t[..i], scale)
-        }
-        _ => (t, 1),
-    };
-    let n: u64 = digits
-        .parse()
-        .map_err(|_| format!("'{s}' is not a byte count (e.g. 512M, 4G)"))?;
-    let bytes = n
-        .checked_mul(scale)
-        .ok_or_else(|| format!("'{s}' is too large"))?;
-    if bytes < 1 << 20 {
-        return Err(format!("'{s}': at least 1M is needed"));
-    }
-    Ok(bytes)
-}
-
 /// The memory budget: `--max-memory`, or 2 GiB, or half the address-space limit when that is
 /// lower (`ulimit -v`).
 pub fn max_memory(option: Option<u64>) -> u64 {
@@ -79,7 +51,7 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
                 .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
             render_args(&s.render, xml)?;
             if let Some(cache) = &s.render.radiosity_cache {
-                if same_file(cache, &s.scene) {
+                if crate::outputs::same_file(cache, &s.scene) {
                     return Err(Usage(format!(
                         "--radiosity-cache '{}' is the scene file",
                         cache.display()
@@ -91,9 +63,10 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             inputs.extend(s.render.radiosity_cache.iter().cloned());
             crate::outputs::check(&outputs, &inputs)
         }
-        Command::Convert(c) => {
-            crate::outputs::check(std::slice::from_ref(&c.output), std::slice::from_ref(&c.input))
-        }
+        Command::Convert(c) => crate::outputs::check(
+            std::slice::from_ref(&c.output),
+            std::slice::from_ref(&c.input),
+        ),
     }
 }
 
@@ -101,14 +74,6 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
 pub fn default_output(scene: &Path) -> String {
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     format!("{stem}.png")
-}
-
-/// True when `a` and `b` name the same existing file.
-pub fn same_file(a: &Path, b: &Path) -> bool {
-    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
-    }
 }
 
 fn render_args(a: &RenderArgs, xml: bool) -> Result<(), Usage> {
@@ -217,17 +182,6 @@ pub fn read_cache(path: &Path, args: &RenderArgs) -> std::io::Result<Vec<u8>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn byte_counts() {
-        assert_eq!(parse_bytes("512M"), Ok(512 << 20));
-        assert_eq!(parse_bytes("4g"), Ok(4 << 30));
-        assert_eq!(parse_bytes("2097152"), Ok(2 << 20));
-        assert!(parse_bytes("12").unwrap_err().contains("at least"));
-        assert!(parse_bytes("1X").unwrap_err().contains("unit"));
-        assert!(parse_bytes("-1G").is_err());
-        assert!(parse_bytes("99999999999T").unwrap_err().contains("too large"));
-    }
 
     #[test]
     fn huge_images_are_refused_naming_the_option() {

@@ -13,6 +13,7 @@ macro_rules! eprintln {
 }
 
 mod args;
+mod bytes;
 mod convert;
 mod exit;
 mod inputs;
@@ -29,7 +30,11 @@ fn main() -> ExitCode {
         Err(e) => {
             // Help and version go to standard output with status 0; errors are usage errors.
             let _ = e.print();
-            return ExitCode::from(if e.use_stderr() { exit::USAGE } else { exit::OK });
+            return ExitCode::from(if e.use_stderr() {
+                exit::USAGE
+            } else {
+                exit::OK
+            });
         }
     };
     if let Err(e) = inputs::validate(&cli.command) {

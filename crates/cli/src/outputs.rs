@@ -30,7 +30,12 @@ fn stdout_format(path: &Path) -> Option<Result<Format, Usage>> {
         Format::ALL
             .into_iter()
             .find(|f| f.extension().eq_ignore_ascii_case(ext))
-            .ok_or_else(|| Usage(format!("--output '{s}': unknown image format ({})", FORMATS))),
+            .ok_or_else(|| {
+                Usage(format!(
+                    "--output '{s}': unknown image format ({})",
+                    FORMATS
+                ))
+            }),
     )
 }
 
@@ -57,10 +62,7 @@ pub fn check(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> {
                 o.display()
             )));
         }
-        if outputs[..i]
-            .iter()
-            .any(|p| p == o || crate::inputs::same_file(p, o))
-        {
+        if outputs[..i].iter().any(|p| p == o || same_file(p, o)) {
             return Err(Usage(format!("--output '{}' is given twice", o.display())));
         }
         candela_imageio::check_target(o)
@@ -72,10 +74,7 @@ pub fn check(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> {
 /// Fails when an output is one of `inputs` (a scene, mesh, image or cache file).
 pub fn not_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> {
     for o in outputs {
-        if let Some(i) = inputs
-            .iter()
-            .find(|i| *i == o || crate::inputs::same_file(o, i))
-        {
+        if let Some(i) = inputs.iter().find(|i| *i == o || same_file(o, i)) {
             return Err(Usage(format!(
                 "--output '{}' is an input of this run ('{}'): refusing to overwrite it",
                 o.display(),
@@ -84,6 +83,14 @@ pub fn not_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> 
         }
     }
     Ok(())
+}
+
+/// True when `a` and `b` name the same existing file.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
 }
 
 /// Encodes `img` for every output, then writes them all or none (files beside their targets
@@ -128,7 +135,10 @@ mod tests {
 
     #[test]
     fn standard_output_forms() {
-        assert!(matches!(stdout_format(Path::new("-")), Some(Ok(Format::Png))));
+        assert!(matches!(
+            stdout_format(Path::new("-")),
+            Some(Ok(Format::Png))
+        ));
         assert!(matches!(
             stdout_format(Path::new("PFM:-")),
             Some(Ok(Format::Pfm))

@@ -86,7 +86,9 @@ fn stage(path: &Path, bytes: &[u8]) -> Result<Staged, AtomicWriteError> {
     let fail = |stage| move |source| AtomicWriteError { stage, source };
     check_target(path)?;
     let target = match fs::symlink_metadata(path) {
-        Ok(m) if m.file_type().is_symlink() => fs::canonicalize(path).map_err(fail("resolve the link"))?,
+        Ok(m) if m.file_type().is_symlink() => {
+            fs::canonicalize(path).map_err(fail("resolve the link"))?
+        }
         _ => path.to_path_buf(),
     };
     let Some(name) = target.file_name() else {
@@ -187,7 +189,10 @@ mod tests {
             assert_eq!(e.stage, "check the target", "{path}");
             assert!(e.to_string().contains("not a regular file"), "{e}");
         }
-        assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device_like());
+        assert!(std::fs::metadata("/dev/null")
+            .unwrap()
+            .file_type()
+            .is_char_device_like());
     }
 
     trait CharDevice {

@@ -29,12 +29,13 @@ pub fn read_exr(bytes: &[u8]) -> Result<Image, ImageError> {
 /// Decodes an OpenEXR file held in memory, refusing (from its headers, before any pixel is
 /// decoded) a file whose layers hold more than `limits` allow.
 pub fn read_exr_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageError> {
-    let meta = ::exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(
-        |cause| ImageError::Exr {
-            action: "decode",
-            cause,
-        },
-    )?;
+    let meta =
+        ::exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|cause| {
+            ImageError::Exr {
+                action: "decode",
+                cause,
+            }
+        })?;
     let mut samples = 0u64;
     for header in meta.headers.iter() {
         let size = header.layer_size;

@@ -178,7 +178,10 @@ mod tests {
         std::fs::write(&p, b"0123456789").unwrap();
         assert_eq!(read_file(&p, 10).unwrap(), b"0123456789");
         let e = read_file(&p, 9).unwrap_err();
-        assert!(matches!(e, InputError::TooLarge { size: 10, max: 9 }), "{e}");
+        assert!(
+            matches!(e, InputError::TooLarge { size: 10, max: 9 }),
+            "{e}"
+        );
         assert!(matches!(
             read_file(&dir.join("missing"), 9),
             Err(InputError::Io(_))

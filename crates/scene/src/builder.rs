@@ -4,6 +4,8 @@
 
 use crate::error::{Pos, SceneError};
 use crate::lang::ast::{self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind};
+use crate::loaded::{check_mesh_memory, MAX_CSG_NODES, MAX_SHAPES};
+use candela_imageio::Limits;
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
 use candela_render::light::Emission;
@@ -19,8 +21,6 @@ use candela_render::shape::{
 };
 use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene};
-use crate::loaded::{check_mesh_memory, MAX_CSG_NODES, MAX_SHAPES};
-use candela_imageio::Limits;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -110,7 +110,10 @@ impl Builder<'_> {
                     None => {
                         let img = candela_imageio::read_image_within(&file.path, &self.limits)
                             .map_err(|e| {
-                                self.err(file.pos, format!("cannot load image '{}': {e}", file.name))
+                                self.err(
+                                    file.pos,
+                                    format!("cannot load image '{}': {e}", file.name),
+                                )
                             })?;
                         self.report.inputs.push(file.path.clone());
                         let mut img = img;

@@ -2,9 +2,9 @@
 
 use crate::builder::build_scene;
 use crate::error::SceneError;
-use candela_imageio::Limits;
 use crate::lang::parse_scene;
 use crate::loaded::{LoadOptions, LoadedScene, RenderHints};
+use candela_imageio::Limits;
 use std::collections::HashMap;
 use std::path::Path;
 

@@ -73,11 +73,7 @@ pub const MESH_MEMORY_FRACTION: f64 = 0.5;
 pub const ACCEL_BYTES_PER_TRIANGLE: f64 = 64.0;
 
 /// Fails with a message naming the limit when `bytes` of meshes exceed what `limits` allow.
-pub fn check_mesh_memory(
-    bytes: f64,
-    triangles: usize,
-    limits: &Limits,
-) -> Result<(), String> {
+pub fn check_mesh_memory(bytes: f64, triangles: usize, limits: &Limits) -> Result<(), String> {
     let total = bytes + triangles as f64 * ACCEL_BYTES_PER_TRIANGLE;
     let max = limits.max_memory as f64 * MESH_MEMORY_FRACTION;
     if total > max {

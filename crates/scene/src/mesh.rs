@@ -6,11 +6,11 @@
 //! candela's image lookup counts rows from the top, as Mitsuba does). Indices are validated;
 //! faces with an out-of-range index are an error, degenerate faces are dropped.
 
+use candela_imageio::Limits;
 use candela_render::math::{Normal3, Point2, Point3, Transform};
 use candela_render::shape::Mesh;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{BeginList, PropertyAccess, PropertyAccessResult};
-use candela_imageio::Limits;
 use std::path::Path;
 
 /// A mesh file may take at most this fraction of the memory budget (parsing expands it by up to
@@ -330,7 +330,12 @@ mod tests {
 
     #[test]
     fn obj_quads_become_two_triangles_with_normals_and_flipped_uv() {
-        let m = load_mesh(&tmp("quad.obj", QUAD_OBJ.as_bytes()), &Transform::IDENTITY, &Limits::default()).unwrap();
+        let m = load_mesh(
+            &tmp("quad.obj", QUAD_OBJ.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default(),
+        )
+        .unwrap();
         assert_eq!(m.indices.len(), 2);
         assert_eq!(m.normals.len(), m.positions.len());
         assert_eq!(m.uvs.len(), m.positions.len());
@@ -358,7 +363,12 @@ mod tests {
             ascii += &format!("{} {} {} 0 0 1\n", v[0], v[1], v[2]);
         }
         ascii += "4 0 1 2 3\n";
-        let a = load_mesh(&tmp("a.ply", ascii.as_bytes()), &Transform::IDENTITY, &Limits::default()).unwrap();
+        let a = load_mesh(
+            &tmp("a.ply", ascii.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default(),
+        )
+        .unwrap();
         for (fmt, le) in [("binary_little_endian", true), ("binary_big_endian", false)] {
             let mut b = ply_header(fmt, 4, 1).into_bytes();
             let put_f = |b: &mut Vec<u8>, x: f32| {
@@ -373,7 +383,12 @@ mod tests {
             for i in [0i32, 1, 2, 3] {
                 b.extend(if le { i.to_le_bytes() } else { i.to_be_bytes() });
             }
-            let m = load_mesh(&tmp(&format!("{fmt}.ply"), &b), &Transform::IDENTITY, &Limits::default()).unwrap();
+            let m = load_mesh(
+                &tmp(&format!("{fmt}.ply"), &b),
+                &Transform::IDENTITY,
+                &Limits::default(),
+            )
+            .unwrap();
             assert_eq!(m, a, "{fmt}");
         }
         assert_eq!(a.indices, vec![[0, 1, 2], [0, 2, 3]]);
@@ -382,22 +397,48 @@ mod tests {
 
     #[test]
     fn bad_files_are_errors_not_panics() {
-        let missing = load_mesh(Path::new("/nonexistent/x.obj"), &Transform::IDENTITY, &Limits::default()).unwrap_err();
+        let missing = load_mesh(
+            Path::new("/nonexistent/x.obj"),
+            &Transform::IDENTITY,
+            &Limits::default(),
+        )
+        .unwrap_err();
         assert!(missing.contains("x.obj"), "{missing}");
         let mut bad_index = ply_header("ascii", 1, 1);
         bad_index += "0 0 0 0 0 1\n3 0 1 2\n";
-        assert!(
-            load_mesh(&tmp("bad.ply", bad_index.as_bytes()), &Transform::IDENTITY, &Limits::default())
-                .unwrap_err()
-                .contains("does not exist")
-        );
+        assert!(load_mesh(
+            &tmp("bad.ply", bad_index.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .unwrap_err()
+        .contains("does not exist"));
         let huge = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nend_header\n";
-        assert!(load_mesh(&tmp("huge.ply", huge.as_bytes()), &Transform::IDENTITY, &Limits::default()).is_err());
-        assert!(load_mesh(&tmp("garbage.ply", b"not a ply"), &Transform::IDENTITY, &Limits::default()).is_err());
-        assert!(load_mesh(&tmp("t.stl", b"solid"), &Transform::IDENTITY, &Limits::default())
-            .unwrap_err()
-            .contains("unknown mesh format"));
+        assert!(load_mesh(
+            &tmp("huge.ply", huge.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .is_err());
+        assert!(load_mesh(
+            &tmp("garbage.ply", b"not a ply"),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .is_err());
+        assert!(load_mesh(
+            &tmp("t.stl", b"solid"),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .unwrap_err()
+        .contains("unknown mesh format"));
         let truncated = ply_header("binary_little_endian", 4, 1).into_bytes();
-        assert!(load_mesh(&tmp("trunc.ply", &truncated), &Transform::IDENTITY, &Limits::default()).is_err());
+        assert!(load_mesh(
+            &tmp("trunc.ply", &truncated),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .is_err());
     }
 }

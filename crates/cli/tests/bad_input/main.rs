@@ -121,7 +121,11 @@ fn png_declaring(w: u32, h: u32) -> Vec<u8> {
     ihdr.extend([8, 2, 0, 0, 0]);
     png_chunk(&mut out, b"IHDR", &ihdr);
     // An empty stored zlib stream (whatever the decoder thinks of it).
-    png_chunk(&mut out, b"IDAT", &[0x78, 0x01, 0x01, 0x00, 0x00, 0xff, 0xff, 0, 0, 0, 1]);
+    png_chunk(
+        &mut out,
+        b"IDAT",
+        &[0x78, 0x01, 0x01, 0x00, 0x00, 0xff, 0xff, 0, 0, 0, 1],
+    );
     png_chunk(&mut out, b"IEND", &[]);
     out
 }
@@ -167,7 +171,12 @@ fn polyhedron_scene(n: usize) -> Vec<u8> {
         let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
         let r = (1.0 - z * z).sqrt();
         let phi = i as f64 * 2.399_963;
-        s += &format!(", [{:.6}, {:.6}, {:.6}], 1", r * phi.cos(), r * phi.sin(), z);
+        s += &format!(
+            ", [{:.6}, {:.6}, {:.6}], 1",
+            r * phi.cos(),
+            r * phi.sin(),
+            z
+        );
     }
     s += ")\ncamera(perspective, translation([-4, 0, 0]), 1, 1)\n";
     s.into_bytes()
@@ -175,7 +184,8 @@ fn polyhedron_scene(n: usize) -> Vec<u8> {
 
 /// Named CSG shapes, each the union of the previous one with itself, `n` levels.
 fn csg_chain(n: usize) -> Vec<u8> {
-    let mut s = String::from("material m(diffuse(<0.5, 0.5, 0.5>))\nshape s0(sphere(m, identity))\n");
+    let mut s =
+        String::from("material m(diffuse(<0.5, 0.5, 0.5>))\nshape s0(sphere(m, identity))\n");
     for i in 1..=n {
         s += &format!("shape s{i}(union(s{p}, s{p}))\n", p = i - 1);
     }
@@ -185,7 +195,8 @@ fn csg_chain(n: usize) -> Vec<u8> {
 
 /// Mitsuba `<default>`s that double at every level.
 fn xml_default_bomb(n: usize) -> Vec<u8> {
-    let mut s = String::from("<scene version=\"3.0.0\">\n<default name=\"a0\" value=\"xxxxxxxx\"/>\n");
+    let mut s =
+        String::from("<scene version=\"3.0.0\">\n<default name=\"a0\" value=\"xxxxxxxx\"/>\n");
     for i in 1..=n {
         s += &format!("<default name=\"a{i}\" value=\"$a{p}$a{p}\"/>\n", p = i - 1);
     }
@@ -245,10 +256,16 @@ fn generate(name: &str, dir: &Path) -> Vec<u8> {
         "exr_huge" => exr_declaring(60_000, 60_000),
         "exr_wide" => exr_declaring(i32::MAX, 1),
         "exr_ok" => candela_imageio::exr::write_exr(&candela_render::Image::new(2, 2)).unwrap(),
-        "hdr_huge" => b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 60000 +X 60000\n\x02\x02\x00\x00".to_vec(),
+        "hdr_huge" => {
+            b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 60000 +X 60000\n\x02\x02\x00\x00".to_vec()
+        }
         "hdr_wide" => b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 1 +X 4000000000\n".to_vec(),
         "pfm_huge" => pfm(60_000, 60_000, &[1.0; 6]),
-        "pfm_negative" => pfm(2, 1, &[-1.0, f32::NAN, f32::INFINITY, 0.5, -0.0, f32::NEG_INFINITY]),
+        "pfm_negative" => pfm(
+            2,
+            1,
+            &[-1.0, f32::NAN, f32::INFINITY, 0.5, -0.0, f32::NEG_INFINITY],
+        ),
         "pfm_ok" => pfm(2, 1, &[0.5; 6]),
         "png_ok" => candela_imageio::png::write_png(1, 1, &[10, 20, 30]).unwrap(),
         "obj_2000" => obj(2000),
@@ -391,7 +408,10 @@ fn run_case(c: &Case, root: &Path) -> Result<(), String> {
     }
     let after = snapshot(&dir);
     for (name, what) in &before {
-        let may_change = c.post.split(',').any(|p| p.trim() == format!("changed:{name}"));
+        let may_change = c
+            .post
+            .split(',')
+            .any(|p| p.trim() == format!("changed:{name}"));
         if !may_change && after.get(name) != Some(what) {
             return fail(format!("{name} was changed or removed"));
         }

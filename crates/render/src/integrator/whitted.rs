@@ -68,7 +68,9 @@ impl Whitted {
                 let (f, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, eta);
                 let nf = if cos_i >= 0.0 { n } else { -n };
                 let r = reflect(wo, nf);
-                l += w.reflect * f * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
+                l += w.reflect
+                    * f
+                    * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
                 if f < 1.0 {
                     let t = refract(wo, n, cos_t, eta_ti);
                     let lt = self.trace(scene, &si.spawn_ray(t), depth + 1, budget, sampler, stats);
@@ -77,7 +79,8 @@ impl Whitted {
             }
             None if !w.reflect.is_black() => {
                 let r = reflect(wo, si.facing_shading_normal().to_vec());
-                l += w.reflect * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
+                l += w.reflect
+                    * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
             }
             None => {}
         }

@@ -53,7 +53,11 @@ impl Radiosity {
         Self::solve_inner(scene, opts, true)
     }
 
-    fn solve_inner(scene: &Scene, opts: &RadiosityOptions, refuse: bool) -> Result<Radiosity, String> {
+    fn solve_inner(
+        scene: &Scene,
+        opts: &RadiosityOptions,
+        refuse: bool,
+    ) -> Result<Radiosity, String> {
         let start = Instant::now();
         let build = || {
             let mut m = mesh::Meshing::build(scene, opts.patch_size, opts.cull_hidden_sides);

@@ -169,20 +169,24 @@ fn clipped_bounds(planes: &[(Vec3, f32)]) -> Result<Bounds3, PolyhedronError> {
         hi[i] = rough.iter().map(|p| p[i]).fold(f64::NEG_INFINITY, f64::max);
     }
     let margin = 0.01 * (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max) + 1e-3;
-    let fine = clip_box(
-        planes,
-        lo.map(|x| x - margin),
-        hi.map(|x| x + margin),
-    )?;
+    let fine = clip_box(planes, lo.map(|x| x - margin), hi.map(|x| x + margin))?;
     let mut b = Bounds3::EMPTY;
     for p in fine {
-        b = b.union_point(crate::math::Point3::new(p[0] as f32, p[1] as f32, p[2] as f32));
+        b = b.union_point(crate::math::Point3::new(
+            p[0] as f32,
+            p[1] as f32,
+            p[2] as f32,
+        ));
     }
     Ok(b)
 }
 
 /// The vertices of the box [lo, hi] clipped by every half-space (see [`clipped_bounds`]).
-fn clip_box(planes: &[(Vec3, f32)], lo: [f64; 3], hi: [f64; 3]) -> Result<Vec<[f64; 3]>, PolyhedronError> {
+fn clip_box(
+    planes: &[(Vec3, f32)],
+    lo: [f64; 3],
+    hi: [f64; 3],
+) -> Result<Vec<[f64; 3]>, PolyhedronError> {
     type P = [f64; 3];
     let dot = |a: P, b: P| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let lerp = |a: P, b: P, t: f64| {
@@ -220,7 +224,12 @@ fn clip_box(planes: &[(Vec3, f32)], lo: [f64; 3], hi: [f64; 3]) -> Result<Vec<[f
         for face in faces {
             let dist: Vec<f64> = face.iter().map(|&p| dot(n, p) - d).collect();
             if dist.iter().all(|&x| x <= tol) {
-                cut.extend(face.iter().zip(&dist).filter(|(_, &x)| x >= -tol).map(|(p, _)| *p));
+                cut.extend(
+                    face.iter()
+                        .zip(&dist)
+                        .filter(|(_, &x)| x >= -tol)
+                        .map(|(p, _)| *p),
+                );
                 kept.push(face);
                 continue;
             }
@@ -250,7 +259,8 @@ fn clip_box(planes: &[(Vec3, f32)], lo: [f64; 3], hi: [f64; 3]) -> Result<Vec<[f
             let c = cut.iter().fold([0.0; 3], |s, p| {
                 [s[0] + p[0] / k, s[1] + p[1] / k, s[2] + p[2] / k]
             });
-            let frame = Frame::from_normal(Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32).to_normal());
+            let frame =
+                Frame::from_normal(Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32).to_normal());
             let (fs, ft) = (frame.s, frame.t);
             let (fs, ft) = (
                 [fs.x as f64, fs.y as f64, fs.z as f64],
