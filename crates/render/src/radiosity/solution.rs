@@ -47,6 +47,19 @@ impl Radiosity {
         }
     }
 
+    /// Checks cache bytes against `scene` and `opts` as a solve would (format, checksum,
+    /// fingerprint, replayed refinement, counts and values) without solving; `Err` says why
+    /// the cache would not be used.
+    pub fn check_cache(scene: &Scene, opts: &RadiosityOptions, bytes: &[u8]) -> Result<(), String> {
+        let mut m = mesh::Meshing::build(scene, opts.patch_size, opts.cull_hidden_sides);
+        let fingerprint = cache::fingerprint(scene, opts, m.patch_size);
+        match cache::decode(bytes, fingerprint) {
+            Ok(d) => replay(&mut m, scene, &d),
+            Err(cache::CacheError::Stale) => Err("stale".into()),
+            Err(cache::CacheError::Invalid(e)) => Err(e),
+        }
+    }
+
     /// As [`Radiosity::solve`], but a patch with a non-finite emission or reflectance is an
     /// error, found before any form factor is computed.
     pub fn try_solve(scene: &Scene, opts: &RadiosityOptions) -> Result<Radiosity, String> {
