@@ -38,8 +38,9 @@ impl Radiosity {
     /// Meshes, computes form factors, solves and refines, or loads the solution from
     /// `opts.cache` when it matches the scene and the options.
     ///
-    /// Non-finite emission or reflectance (which no solve can converge on) is taken as 0; see
-    /// [`Radiosity::try_solve`] to refuse it instead.
+    /// Non-finite emission or reflectance (which no solve can converge on) is taken as 0 on the
+    /// initial patches, and the solver stops as soon as its residual is not finite; see
+    /// [`Radiosity::try_solve`] to refuse such input instead.
     pub fn solve(scene: &Scene, opts: &RadiosityOptions) -> Radiosity {
         match Self::solve_inner(scene, opts, false) {
             Ok(r) => r,
