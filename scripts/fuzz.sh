@@ -7,6 +7,7 @@
 #
 #   scripts/fuzz.sh 120
 #   TARGETS="obj ply" scripts/fuzz.sh 30
+#   RUNS=100000 scripts/fuzz.sh 900    # stop each target after 10^5 executions (or 900 s)
 set -u
 secs=${1:-60}
 cd "$(dirname "$0")/../fuzz" || exit 1
@@ -19,9 +20,11 @@ for t in $targets; do
     mkdir -p "corpus/$t" "seeds/$t"
     dict=""
     [ "$t" = parse_scene ] && dict="-dict=parse_scene.dict"
+    runs_opt=""
+    [ -n "${RUNS:-}" ] && runs_opt="-runs=$RUNS"
     cargo +nightly fuzz run -O "$t" "corpus/$t" "seeds/$t" -- \
         -max_total_time="$secs" -rss_limit_mb=1024 -malloc_limit_mb=1024 -timeout=10 \
-        -print_final_stats=1 $dict >"logs/$t.log" 2>&1
+        -print_final_stats=1 $runs_opt $dict >"logs/$t.log" 2>&1
     rc=$?
     runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "logs/$t.log" | grep -o '[0-9]*$' | tail -1)
     if [ $rc -ne 0 ]; then
