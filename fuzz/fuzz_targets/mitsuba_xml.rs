@@ -13,6 +13,7 @@ fuzz_target!(|text: &str| {
     let opts = LoadOptions {
         defines: vec![("spp".to_owned(), "4".to_owned())],
         accel: AccelKind::None,
+        limits: candela_imageio::Limits::from_memory(256 << 20),
     };
     if let Err(e) = load_mitsuba(Path::new("/nonexistent/fuzz.xml"), text, &opts) {
         let _ = e.to_string();

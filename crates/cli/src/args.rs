@@ -73,7 +73,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "NAME")]
     pub accel: Option<String>,
     /// The seed of the random sequences (same seed, same image, any thread count).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     pub seed: u64,
     /// Overrides a `float` variable (or a Mitsuba `<default>`): NAME=VALUE or NAME:VALUE.
     #[arg(
@@ -98,6 +98,10 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub threads: Option<u32>,
+    /// Memory budget in bytes (suffixes K, M, G, T): limits image size, file sizes, texture
+    /// pixels and meshes (docs/limits.md); default 2G, or half of `ulimit -v`.
+    #[arg(long, value_name = "BYTES", value_parser = crate::bytes::parse_bytes)]
+    pub max_memory: Option<u64>,
     /// Print rays traced, time and Mrays/s.
     #[arg(long)]
     pub stats: bool,
@@ -210,8 +214,11 @@ pub struct MergeArgs {
 pub struct ConvertArgs {
     /// The input image (.pfm, .exr, .hdr, .png).
     pub input: PathBuf,
-    /// The output image (.pfm, .exr, .hdr, .png).
+    /// The output image (.pfm, .exr, .hdr, .png; `-` for a PNG on standard output).
     pub output: PathBuf,
+    /// Memory budget in bytes (suffixes K, M, G, T), as for `render`.
+    #[arg(long, value_name = "BYTES", value_parser = crate::bytes::parse_bytes)]
+    pub max_memory: Option<u64>,
     /// How an LDR output is tone mapped.
     #[command(flatten)]
     pub tone: ToneArgs,

@@ -1,19 +1,16 @@
-//! `candela convert IN OUT`: between PFM, OpenEXR and PNG, tone mapping for PNG outputs.
+//! `candela convert IN OUT`: between PFM, OpenEXR, Radiance HDR and PNG, tone mapping for PNG
+//! outputs (`-` as OUT: a PNG on standard output).
 
 use crate::args::ConvertArgs;
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 
-/// Runs the conversion.
+/// Runs the conversion (the options were checked by [`crate::inputs::validate`]).
 pub fn run(a: ConvertArgs) -> Result<()> {
-    if !candela_imageio::supported_extension(&a.output) {
-        bail!(
-            "'{}': unknown output format (use .png, .pfm or .exr)",
-            a.output.display()
-        );
-    }
-    let img = candela_imageio::read_image(&a.input)
-        .with_context(|| format!("reading '{}'", a.input.display()))?;
-    candela_imageio::write_image(&a.output, &img, &crate::images::tone_map(&a.tone, 1.0))
-        .with_context(|| format!("writing '{}'", a.output.display()))?;
-    Ok(())
+    let limits = candela_imageio::Limits::from_memory(crate::inputs::max_memory(a.max_memory));
+    let img = candela_imageio::read_image_within(&a.input, &limits)?;
+    crate::outputs::write_all(
+        std::slice::from_ref(&a.output),
+        &img,
+        &crate::images::tone_map(&a.tone, 1.0),
+    )
 }

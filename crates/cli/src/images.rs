@@ -39,12 +39,12 @@ pub fn parse_aovs(list: Option<&str>) -> Result<AovSet> {
         .map(str::trim)
         .filter(|s| !s.is_empty())
     {
-        let aov = Aov::from_name(name).with_context(|| {
+        let aov = Aov::from_name(name).ok_or_else(|| {
             let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
-            format!(
+            crate::exit::Usage(format!(
                 "--aov '{name}': unknown output variable (expected some of: {})",
                 names.join(", ")
-            )
+            ))
         })?;
         set = set.with(aov);
     }
@@ -115,15 +115,22 @@ pub fn write_film(
             }
         };
         if extras.keep_noisy {
-            for path in outputs {
-                write_one(&noisy_name(path), &beauty, &[], tone)?;
-            }
+            let noisy: Vec<PathBuf> = outputs
+                .iter()
+                .filter(|p| !crate::outputs::is_stdout(p))
+                .map(|p| noisy_name(p))
+                .collect();
+            crate::outputs::write_all(&noisy, &beauty, tone)?;
         }
         clean
     } else {
         beauty
     };
     layers.retain(|l| extras.written.iter().any(|a| a.name() == l.name));
+    if layers.is_empty() {
+        // All files or none, `-` on standard output.
+        return crate::outputs::write_all(outputs, &image, tone);
+    }
     for path in outputs {
         write_one(path, &image, &layers, tone)?;
     }

@@ -1,7 +1,7 @@
 //! Progress on stderr: a bar for people, JSON lines for schedulers and wrappers
 //! (`--progress json`, documented in docs/command-line.md), or nothing.
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use candela_render::stats::RayStats;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -27,9 +27,10 @@ impl ProgressMode {
             None | Some("bar") => Self::Bar,
             Some("json") => Self::Json,
             Some("none") => Self::None,
-            Some(other) => {
-                bail!("--progress '{other}': unknown progress style (expected one of: bar, json, none)")
-            }
+            Some(other) => return Err(crate::exit::Usage(format!(
+                "--progress '{other}': unknown progress style (expected one of: bar, json, none)"
+            ))
+            .into()),
         })
     }
 }

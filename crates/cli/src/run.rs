@@ -1,6 +1,7 @@
 //! `candela demo` and `candela render`: load, validate options, render, write.
 
 use crate::args::{RenderArgs, SceneArgs};
+use crate::exit::Usage;
 use crate::frames;
 use crate::identity;
 use crate::images::{parse_aovs, tone_map, write_film, Extras, RENDER_GAMMA};
@@ -36,10 +37,10 @@ pub fn render(a: SceneArgs) -> Result<()> {
 /// Renders each frame of `--frames` (or the one frame) of the scene (the demo for `None`).
 fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
     let default_out = match scene {
-        Some(s) => PathBuf::from(s.file_stem().unwrap_or_default()).with_extension("png"),
-        None => PathBuf::from("demo.png"),
+        Some(s) => crate::inputs::default_output(s),
+        None => "demo.png".to_string(),
     };
-    let outputs = outputs(args, &default_out)?;
+    let outputs = crate::outputs::resolve(&args.outputs, &default_out);
     let base_opts = load_options(args)?;
     let mode = ProgressMode::from_args(args.progress.as_deref(), args.quiet)?;
     let frames: Vec<Option<u32>> = match args.frames {
@@ -54,10 +55,11 @@ fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
             .chain(&args.resume);
         for p in named {
             if !frames::has_number(p) {
-                bail!(
+                return Err(Usage(format!(
                     "--frames: '{}' has no %d (or %04d) for the frame number, so every frame would overwrite it",
                     p.display()
-                );
+                ))
+                .into());
             }
         }
     }
@@ -100,24 +102,6 @@ struct FramePaths {
     partial: Option<PathBuf>,
     checkpoint: Option<PathBuf>,
     resume: Option<PathBuf>,
-}
-
-/// The output files, checked before any work so that a bad extension costs nothing.
-fn outputs(args: &RenderArgs, default: &Path) -> Result<Vec<PathBuf>> {
-    let outs = if args.outputs.is_empty() {
-        vec![default.to_path_buf()]
-    } else {
-        args.outputs.clone()
-    };
-    for o in &outs {
-        if !candela_imageio::supported_extension(o) {
-            bail!(
-                "--output '{}': unknown image format (use .png, .pfm or .exr)",
-                o.display()
-            );
-        }
-    }
-    Ok(outs)
 }
 
 /// The `--sampler` option.
@@ -170,7 +154,11 @@ fn load_options(args: &RenderArgs) -> Result<LoadOptions> {
         }
         defines.push((name.trim().to_string(), value.trim().to_string()));
     }
-    Ok(LoadOptions { defines, accel })
+    Ok(LoadOptions {
+        defines,
+        accel,
+        limits: crate::inputs::limits(args),
+    })
 }
 
 /// The radiosity options of the command line (`--patch-size`, `--form-factors`, `--solver`,
@@ -204,7 +192,7 @@ fn radiosity_options(args: &RenderArgs, kind: IntegratorKind) -> Result<Radiosit
     }
     if kind == IntegratorKind::Radiosity {
         if let Some(path) = &args.radiosity_cache {
-            match std::fs::read(path) {
+            match crate::inputs::read_cache(path, args) {
                 Ok(bytes) => o.cache = Some(bytes.into()),
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                 Err(e) => eprintln!(
@@ -257,6 +245,7 @@ fn render_frame(
     for w in &loaded.warnings {
         eprintln!("candela: warning: {w}");
     }
+    crate::outputs::not_inputs(&paths.outputs, &loaded.inputs)?;
     let hints = &loaded.hints;
     let name = args
         .integrator
@@ -290,6 +279,7 @@ fn render_frame(
             .or(hints.filter)
             .unwrap_or_default(),
     };
+    crate::inputs::check_render(settings.width, settings.height, args)?;
     // What this job renders: a window of the frame and a range of sample indices.
     let window = match args.crop {
         None => Window::full(settings.width, settings.height),
@@ -301,23 +291,22 @@ fn render_frame(
                 y1: y1 as usize,
             };
             if !w.fits(settings.width, settings.height) {
-                bail!(
+                return Err(Usage(format!(
                     "--crop {x0},{x1},{y0},{y1}: the window does not fit the {}×{} image",
-                    settings.width,
-                    settings.height
-                );
+                    settings.width, settings.height
+                ))
+                .into());
             }
             w
         }
     };
     let target = args.samples.unwrap_or((0, settings.spp));
     if target.1 > settings.spp {
-        bail!(
+        return Err(Usage(format!(
             "--samples {}..{}: the frame has only {} samples per pixel (--spp)",
-            target.0,
-            target.1,
-            settings.spp
-        );
+            target.0, target.1, settings.spp
+        ))
+        .into());
     }
     // A time limit without a checkpoint file saves beside the first output.
     let checkpoint = paths

@@ -89,7 +89,7 @@ fn aovs_hold_the_first_hit_and_become_exr_layers_and_pfm_files() {
     assert!((albedo.get(3, 3).g - 0.4).abs() < 1e-6);
 
     let o = candela(&["demo", "-q", "--aov", "albedo,bogus"]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "a usage error");
     assert!(stderr(&o).contains("--aov 'bogus'"), "{}", stderr(&o));
 }
 

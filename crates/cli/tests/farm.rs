@@ -365,7 +365,7 @@ fn frames_vary_the_clock_and_number_the_files() {
         "-o",
         s(&dir.join("x.png")),
     ]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(2), "a usage error");
     assert!(stderr(&o).contains("%d"), "{}", stderr(&o));
 }
 

@@ -25,6 +25,20 @@ pub enum ImageError {
         /// The OS error.
         cause: io::Error,
     },
+    /// An input file that is not a regular file, is too large, or cannot be read.
+    #[error("{}: cannot read: {cause}", .path.display())]
+    Input {
+        /// The file concerned.
+        path: PathBuf,
+        /// Why.
+        cause: crate::input::InputError,
+    },
+    /// An image larger than the limits (docs/limits.md).
+    #[error("{reason}")]
+    Limit {
+        /// Which limit, with the figures.
+        reason: String,
+    },
     /// A PFM file does not start with the line `PF` (colour) or `Pf` (grey).
     #[error(
         "not a PFM file: the first line is {found:?}, expected \"PF\" (colour) or \"Pf\" (grey)"
@@ -162,7 +176,10 @@ impl ImageError {
     /// Adds `path` as context unless the error already names a file.
     pub(crate) fn in_file(self, path: impl Into<PathBuf>) -> Self {
         match self {
-            e @ (Self::Io { .. } | Self::UnsupportedExtension { .. } | Self::File { .. }) => e,
+            e @ (Self::Io { .. }
+            | Self::Input { .. }
+            | Self::UnsupportedExtension { .. }
+            | Self::File { .. }) => e,
             e => Self::File {
                 path: path.into(),
                 error: Box::new(e),

@@ -17,13 +17,44 @@ use ::exr::prelude::{
 };
 use candela_render::{Image, Rgb};
 
-use crate::{check_size, image_from_pixels, ImageError};
+use crate::{check_size, image_from_pixels, ImageError, Limits};
 
 /// A decoded layer with all its channels.
 type FlatLayer = Layer<AnyChannels<FlatSamples>>;
 
-/// Decodes an OpenEXR file held in memory.
+/// Decodes an OpenEXR file held in memory, within the default [`Limits`].
 pub fn read_exr(bytes: &[u8]) -> Result<Image, ImageError> {
+    read_exr_within(bytes, &Limits::default())
+}
+
+/// Decodes an OpenEXR file held in memory, refusing (from its headers, before any pixel is
+/// decoded) a file whose layers hold more than `limits` allow.
+pub fn read_exr_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageError> {
+    let meta =
+        ::exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|cause| {
+            ImageError::Exr {
+                action: "decode",
+                cause,
+            }
+        })?;
+    let mut samples = 0u64;
+    for header in meta.headers.iter() {
+        let size = header.layer_size;
+        limits
+            .check_pixels(size.width() as u64, size.height() as u64)
+            .map_err(|reason| ImageError::Limit { reason })?;
+        let channels = header.channels.list.len().max(1) as u64;
+        samples = samples.saturating_add(size.area() as u64 * channels);
+    }
+    // Every channel of every layer is decoded (4 bytes a sample at most).
+    if samples.saturating_mul(4) > limits.max_memory / 2 {
+        return Err(ImageError::Limit {
+            reason: format!(
+                "the OpenEXR layers hold {samples} samples, more than half of --max-memory {} can decode",
+                limits.max_memory
+            ),
+        });
+    }
     let decoded = read()
         .no_deep_data()
         .largest_resolution_level()

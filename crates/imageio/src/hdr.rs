@@ -5,12 +5,18 @@
 use candela_render::Image;
 use image::{codecs::hdr::HdrEncoder, ImageFormat};
 
-use crate::{check_size, decode_with_image, encode_with_image, ImageError};
+use crate::{check_size, decode_with_image, encode_with_image, ImageError, Limits};
 
 /// Decodes a Radiance HDR file held in memory. The first line is `#?` and the name of the
 /// program that wrote the file (`#?RADIANCE`, `#?RGBE` from Mitsuba and others, …): any name
-/// is accepted.
+/// is accepted. The default [`Limits`] apply.
 pub fn read_hdr(bytes: &[u8]) -> Result<Image, ImageError> {
+    read_hdr_within(bytes, &Limits::default())
+}
+
+/// Decodes a Radiance HDR file held in memory, refusing an image larger than `limits` allow
+/// before decoding its pixels.
+pub fn read_hdr_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageError> {
     let renamed;
     let bytes = match bytes.iter().position(|&b| b == b'\n') {
         Some(end) if bytes.starts_with(b"#?") && !bytes.starts_with(b"#?RADIANCE\n") => {
@@ -22,6 +28,7 @@ pub fn read_hdr(bytes: &[u8]) -> Result<Image, ImageError> {
     decode_with_image(
         bytes,
         ImageFormat::Hdr,
+        limits,
         |x| x,
         |cause| ImageError::Hdr {
             action: "decode",

@@ -15,18 +15,20 @@ pub mod atomic;
 pub mod error;
 pub mod exr;
 pub mod hdr;
+pub mod input;
 pub mod partial;
 pub mod pfm;
 pub mod png;
 pub mod raster;
 pub mod tonemap;
 
-use std::{fs, path::Path};
+use std::path::Path;
 
 use candela_render::{Image, Rgb};
 
-pub use atomic::write_atomically;
+pub use atomic::{check_target, write_all_atomically, write_atomically};
 pub use error::ImageError;
+pub use input::Limits;
 pub use pfm::{read_pfm, read_pfm_file, write_pfm};
 pub use tonemap::{Encoding, ToneMap};
 
@@ -74,13 +76,20 @@ impl Format {
             })
     }
 
-    /// Decodes a file of this format held in memory to linear RGB.
+    /// Decodes a file of this format held in memory to linear RGB, within the default
+    /// [`Limits`].
     pub fn decode(self, bytes: &[u8]) -> Result<Image, ImageError> {
+        self.decode_within(bytes, &Limits::default())
+    }
+
+    /// Decodes a file of this format held in memory to linear RGB, refusing an image larger
+    /// than `limits` allow before allocating it.
+    pub fn decode_within(self, bytes: &[u8], limits: &Limits) -> Result<Image, ImageError> {
         match self {
-            Format::Pfm => pfm::read_pfm(bytes),
-            Format::Exr => exr::read_exr(bytes),
-            Format::Png => png::read_png(bytes),
-            Format::Hdr => hdr::read_hdr(bytes),
+            Format::Pfm => pfm::read_pfm_within(bytes, limits),
+            Format::Exr => exr::read_exr_within(bytes, limits),
+            Format::Png => png::read_png_within(bytes, limits),
+            Format::Hdr => hdr::read_hdr_within(bytes, limits),
         }
     }
 
@@ -101,18 +110,30 @@ pub fn supported_extension(path: &Path) -> bool {
     Format::from_path(path).is_ok()
 }
 
-/// Reads an image, choosing the decoder by the file's extension.
+/// Reads an image, choosing the decoder by the file's extension, within the default
+/// [`Limits`].
 ///
 /// Beside the four formats that are also written, the read-only 8-bit formats of [`raster`]
 /// (JPEG, BMP, TGA, PNM) are decoded from sRGB to linear RGB.
 pub fn read_image(path: &Path) -> Result<Image, ImageError> {
+    read_image_within(path, &Limits::default())
+}
+
+/// Reads an image, choosing the decoder by the file's extension: a regular file of at most
+/// `limits.max_file_bytes`, holding at most `limits.max_pixels` pixels.
+pub fn read_image_within(path: &Path, limits: &Limits) -> Result<Image, ImageError> {
     match Format::from_path(path) {
-        Ok(format) => read_as(path, format),
+        Ok(format) => {
+            let bytes = read_input(path, limits)?;
+            format
+                .decode_within(&bytes, limits)
+                .map_err(|e| e.in_file(path))
+        }
         Err(unsupported) => {
             let Some((format, name)) = raster::format_of(path) else {
                 return Err(unsupported);
             };
-            let bytes = fs::read(path).map_err(ImageError::io(path, "read"))?;
+            let bytes = read_input(path, limits)?;
             raster::decode(&bytes, format, name).map_err(|e| e.in_file(path))
         }
     }
@@ -136,10 +157,15 @@ pub fn write_image(path: &Path, img: &Image, tonemap: &ToneMap) -> Result<(), Im
     write_atomically(path, &bytes).map_err(|e| ImageError::io(path, e.stage)(e.source))
 }
 
-/// Reads and decodes `path` as `format`.
-pub(crate) fn read_as(path: &Path, format: Format) -> Result<Image, ImageError> {
-    let bytes = fs::read(path).map_err(ImageError::io(path, "read"))?;
-    format.decode(&bytes).map_err(|e| e.in_file(path))
+/// Reads the input file `path` within `limits` ([`input::read_file`]).
+pub(crate) fn read_input(path: &Path, limits: &Limits) -> Result<Vec<u8>, ImageError> {
+    input::read_file(path, limits.max_file_bytes).map_err(|cause| match cause {
+        input::InputError::Io(e) => ImageError::io(path, "read")(e),
+        cause => ImageError::Input {
+            path: path.to_path_buf(),
+            cause,
+        },
+    })
 }
 
 /// Fails with [`ImageError::EmptyImage`] or [`ImageError::TooLarge`] unless a
@@ -165,11 +191,24 @@ pub(crate) fn check_size(width: usize, height: usize) -> Result<(), ImageError> 
 pub(crate) fn decode_with_image(
     bytes: &[u8],
     format: image::ImageFormat,
+    limits: &Limits,
     f: impl Fn(f32) -> f32,
-    error: impl FnOnce(image::ImageError) -> ImageError,
+    error: impl Fn(image::ImageError) -> ImageError,
 ) -> Result<Image, ImageError> {
-    let decoded = image::load_from_memory_with_format(bytes, format)
-        .map_err(error)?
+    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+    // The codec's own limits, and ours checked on the header before any pixel is decoded.
+    let mut codec_limits = image::Limits::default();
+    codec_limits.max_image_width = Some(input::MAX_READ_SIDE);
+    codec_limits.max_image_height = Some(input::MAX_READ_SIDE);
+    codec_limits.max_alloc = Some(limits.max_memory / 2);
+    reader.limits(codec_limits);
+    let decoder = reader.into_decoder().map_err(&error)?;
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    limits
+        .check_pixels(u64::from(width), u64::from(height))
+        .map_err(|reason| ImageError::Limit { reason })?;
+    let decoded = image::DynamicImage::from_decoder(decoder)
+        .map_err(&error)?
         .into_rgb32f();
     let (width, height) = (decoded.width() as usize, decoded.height() as usize);
     let pixels = decoded

@@ -21,10 +21,15 @@ use std::path::Path;
 
 use candela_render::{Image, Rgb};
 
-use crate::{image_from_pixels, read_as, Format, ImageError};
+use crate::{image_from_pixels, ImageError, Limits};
 
-/// Decodes a PFM file held in memory.
+/// Decodes a PFM file held in memory, within the default [`Limits`].
 pub fn read_pfm(bytes: &[u8]) -> Result<Image, ImageError> {
+    read_pfm_within(bytes, &Limits::default())
+}
+
+/// Decodes a PFM file held in memory, refusing an image larger than `limits` allow.
+pub fn read_pfm_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageError> {
     let mut rest = bytes;
     let channels = header_line(&mut rest, |line| match line {
         "PF" => Some(3),
@@ -55,6 +60,10 @@ pub fn read_pfm(bytes: &[u8]) -> Result<Image, ImageError> {
         expected,
         got: rest.len(),
     })?;
+    // The data is present, so the file was already that large; the image is three times it.
+    limits
+        .check_pixels(width as u64, height as u64)
+        .map_err(|reason| ImageError::Limit { reason })?;
     let decode = if little_endian {
         f32::from_le_bytes
     } else {
@@ -72,7 +81,9 @@ pub fn read_pfm(bytes: &[u8]) -> Result<Image, ImageError> {
 
 /// Reads a PFM file, whatever its extension.
 pub fn read_pfm_file(path: &Path) -> Result<Image, ImageError> {
-    read_as(path, Format::Pfm)
+    let limits = Limits::default();
+    let bytes = crate::read_input(path, &limits)?;
+    read_pfm_within(&bytes, &limits).map_err(|e| e.in_file(path))
 }
 
 /// Encodes `img` as a little-endian RGB PFM file.

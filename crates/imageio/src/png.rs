@@ -10,11 +10,19 @@
 use candela_render::Image;
 use image::{codecs::png::PngEncoder, ExtendedColorType, ImageEncoder, ImageFormat};
 
-use crate::{check_size, decode_with_image, encode_with_image, tonemap::srgb_eotf, ImageError};
+use crate::{
+    check_size, decode_with_image, encode_with_image, tonemap::srgb_eotf, ImageError, Limits,
+};
 
-/// Decodes a PNG held in memory to linear RGB.
+/// Decodes a PNG held in memory to linear RGB, within the default [`Limits`].
 pub fn read_png(bytes: &[u8]) -> Result<Image, ImageError> {
-    decode_with_image(bytes, ImageFormat::Png, srgb_eotf, |cause| {
+    read_png_within(bytes, &Limits::default())
+}
+
+/// Decodes a PNG held in memory to linear RGB, refusing an image larger than `limits` allow
+/// before decoding its pixels.
+pub fn read_png_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageError> {
+    decode_with_image(bytes, ImageFormat::Png, limits, srgb_eotf, |cause| {
         ImageError::Png {
             action: "decode",
             cause,

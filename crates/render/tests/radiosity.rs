@@ -815,3 +815,38 @@ fn final_gather_and_flat_display_agree_with_gouraud_on_the_mean() {
         assert!(rel_diff(*m, means[0]) < 0.05, "{means:?}");
     }
 }
+
+/// Non-finite emission cannot be solved: `try_solve` refuses it before any form factor, and
+/// `solve` stops its sweeps as soon as the residual is not finite (no thousands of sweeps).
+#[test]
+fn non_finite_emission_is_refused_up_front() {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(white());
+    let e = b.add_emission(Emission {
+        radiance: Texture::Uniform(Rgb::new(f32::NAN, 1.0, f32::INFINITY)),
+        two_sided: true,
+    });
+    let walls = closed_box(0.5, 0.0);
+    for o in walls.geometry.objects() {
+        b.add_shape(o.shape.clone(), m, None);
+    }
+    b.add_shape(
+        para([-0.2, 0.9, -0.2], [0.4, 0.0, 0.0], [0.0, 0.0, 0.4]),
+        m,
+        Some(e),
+    );
+    let scene = b.build(AccelKind::Bvh);
+    let opts = RadiosityOptions {
+        patch_size: Some(0.25),
+        ..Default::default()
+    };
+    let start = std::time::Instant::now();
+    let Err(err) = Radiosity::try_solve(&scene, &opts) else {
+        panic!("a non-finite emission was solved");
+    };
+    assert!(err.contains("non-finite emission"), "{err}");
+    assert!(start.elapsed().as_secs_f64() < 5.0);
+    let r = Radiosity::solve(&scene, &opts);
+    let report = r.outcome().report;
+    assert!(report.iterations < 10, "{report}");
+}

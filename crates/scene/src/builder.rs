@@ -4,6 +4,8 @@
 
 use crate::error::{Pos, SceneError};
 use crate::lang::ast::{self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind};
+use crate::loaded::{check_mesh_memory, MAX_CSG_NODES, MAX_SHAPES};
+use candela_imageio::Limits;
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
 use candela_render::light::Emission;
@@ -35,15 +37,20 @@ pub struct BuildReport {
     pub bytes_per_triangle: Option<f64>,
     /// Positions of `ambient_light`s and `components(…)`: terms of the local model only.
     pub local_model_terms: Vec<String>,
+    /// The files read (meshes and images).
+    pub inputs: Vec<PathBuf>,
 }
 
 /// Builds the render scene of `desc` with the acceleration structure `accel`.
 pub fn build_scene(
     desc: &SceneDescription,
     accel: AccelKind,
+    limits: &Limits,
 ) -> Result<(Scene, BuildReport), SceneError> {
     let mut b = Builder {
         desc,
+        limits: *limits,
+        shapes: 0,
         scene: SceneBuilder::new(),
         materials: Vec::new(),
         images: HashMap::new(),
@@ -65,6 +72,9 @@ pub fn build_scene(
 
 struct Builder<'a> {
     desc: &'a SceneDescription,
+    limits: Limits,
+    /// Shapes placed so far (copies counted).
+    shapes: usize,
     scene: SceneBuilder,
     /// Material index of the description → render material and emission.
     materials: Vec<(MaterialId, Option<u32>)>,
@@ -100,10 +110,26 @@ impl Builder<'_> {
                 let image = match self.images.get(&path) {
                     Some(i) => i.clone(),
                     None => {
+                        let img = candela_imageio::read_image_within(&path, &self.limits).map_err(
+                            |e| {
+                                self.err(
+                                    file.pos,
+                                    format!("cannot load image '{}': {e}", file.name),
+                                )
+                            },
+                        )?;
+                        self.report.inputs.push(path.clone());
                         crate::inputs::record(&path);
-                        let img = candela_imageio::read_image(&path).map_err(|e| {
-                            self.err(file.pos, format!("cannot load image '{}': {e}", file.name))
-                        })?;
+                        let mut img = img;
+                        let clamped = crate::loaded::clamp_texels(&mut img);
+                        if clamped > 0 {
+                            self.report.warnings.push(format!(
+                                "{}:{}: image '{}': {clamped} texels negative or not finite, clamped to 0",
+                                self.desc.source.path.display(),
+                                file.pos,
+                                file.name
+                            ));
+                        }
                         let img = Arc::new(img);
                         self.images.insert(path, img.clone());
                         img
@@ -351,8 +377,9 @@ impl Builder<'_> {
         if let Some(m) = self.meshes.get(&path) {
             return Ok(m.clone());
         }
-        let m = crate::mesh::load_mesh(&path, &Transform::IDENTITY)
+        let m = crate::mesh::load_mesh(&path, &Transform::IDENTITY, &self.limits)
             .map_err(|e| self.err(file.pos, e))?;
+        self.report.inputs.push(path.clone());
         if m.is_empty() {
             self.report.warnings.push(format!(
                 "{}:{}: mesh '{}' has no triangles",
@@ -379,6 +406,15 @@ impl Builder<'_> {
     ) -> Result<(), SceneError> {
         if depth > MAX_NESTING {
             return Err(self.err(shape.pos, "shapes are nested too deeply"));
+        }
+        if !matches!(shape.kind, ShapeKind::Instance { .. }) {
+            self.shapes += 1;
+            if self.shapes > MAX_SHAPES {
+                return Err(self.err(
+                    shape.pos,
+                    format!("the scene places more than {MAX_SHAPES} shapes (every copy of an instance counted; see docs/limits.md)"),
+                ));
+            }
         }
         let place = |b: &Self, t: &Transform| b.check_transform(&(*extra * *t), shape.pos);
         match &shape.kind {
@@ -431,7 +467,7 @@ impl Builder<'_> {
                 }
                 mesh.props.material = m;
                 mesh.props.emission = e;
-                self.add_mesh(mesh);
+                self.add_mesh(mesh, shape.pos)?;
             }
             ShapeKind::Polygon { material, vertices } => {
                 let (m, e) = self.props(material);
@@ -479,10 +515,12 @@ impl Builder<'_> {
             } => {
                 let (m, e) = self.props(material);
                 let t = place(self, transform)?;
-                let mut mesh = self.mesh(file)?.transformed(&t);
+                let source = self.mesh(file)?;
+                self.count_mesh(&source, shape.pos)?;
+                let mut mesh = source.transformed(&t);
                 mesh.props.material = m;
                 mesh.props.emission = e;
-                self.add_mesh(mesh);
+                self.add_mesh(mesh, shape.pos)?;
             }
             ShapeKind::Csg { .. } => {
                 let mut nodes = Vec::new();
@@ -501,10 +539,23 @@ impl Builder<'_> {
         Ok(())
     }
 
-    fn add_mesh(&mut self, mesh: Mesh) {
+    /// Fails before `mesh` is copied once more when the copy would exceed the memory limit.
+    fn count_mesh(&self, mesh: &Mesh, pos: Pos) -> Result<(), SceneError> {
+        let bytes = crate::mesh::bytes_per_triangle(mesh) * mesh.len() as f64;
+        check_mesh_memory(
+            self.mesh_bytes + bytes,
+            self.report.triangles + mesh.len(),
+            &self.limits,
+        )
+        .map_err(|e| self.err(pos, e))
+    }
+
+    fn add_mesh(&mut self, mesh: Mesh, pos: Pos) -> Result<(), SceneError> {
+        self.count_mesh(&mesh, pos)?;
         self.report.triangles += mesh.len();
         self.mesh_bytes += crate::mesh::bytes_per_triangle(&mesh) * mesh.len() as f64;
         self.scene.add_mesh(mesh);
+        Ok(())
     }
 
     fn polyhedron(&self, shape: &ast::Shape, extra: &Transform) -> Result<Polyhedron, SceneError> {
@@ -537,6 +588,12 @@ impl Builder<'_> {
         if depth > MAX_NESTING {
             return Err(self.err(shape.pos, "shapes are nested too deeply"));
         }
+        if nodes.len() >= MAX_CSG_NODES {
+            return Err(self.err(
+                shape.pos,
+                format!("the CSG tree has more than {MAX_CSG_NODES} nodes (every use of a named shape counted; see docs/limits.md)"),
+            ));
+        }
         let leaf = |solid: Solid, m: &ast::MaterialRef, b: &Self, nodes: &mut Vec<CsgNode>| {
             let (material, emission) = b.props(m);
             nodes.push(CsgNode::Leaf {
@@ -564,7 +621,11 @@ impl Builder<'_> {
             }
             ShapeKind::Mesh { material, transform, file } => {
                 let t = self.check_transform(&(*extra * *transform), shape.pos)?;
-                let m = self.mesh(file)?.transformed(&t);
+                let source = self.mesh(file)?;
+                self.count_mesh(&source, shape.pos)?;
+                let m = source.transformed(&t);
+                self.report.triangles += m.len();
+                self.mesh_bytes += crate::mesh::bytes_per_triangle(&m) * m.len() as f64;
                 leaf(Solid::Mesh(m), material, self, nodes)
             }
             ShapeKind::Csg { op, operands, transform } => {

@@ -121,6 +121,26 @@ impl SceneError {
         }
     }
 
+    /// The error for a file that is not UTF-8: the line and column of the first invalid byte,
+    /// with the valid start of its line.
+    pub fn invalid_utf8(path: impl Into<PathBuf>, e: &std::string::FromUtf8Error) -> Self {
+        let bytes = e.as_bytes();
+        let at = e.utf8_error().valid_up_to();
+        let valid = std::str::from_utf8(&bytes[..at]).unwrap_or_default();
+        let line = valid.matches('\n').count() + 1;
+        let line_start = valid.rfind('\n').map_or(0, |i| i + 1);
+        let col = valid[line_start..].chars().count() + 1;
+        Self::at(
+            path,
+            Pos::new(line as u32, col as u32),
+            format!(
+                "invalid UTF-8 (byte 0x{:02x}): scene files are UTF-8 text",
+                bytes[at]
+            ),
+        )
+        .with_source_line(valid[line_start..].trim_end_matches('\r').to_string())
+    }
+
     /// Attaches the text of the line at the error's position.
     pub fn with_source_line(mut self, line: impl Into<String>) -> Self {
         self.source_line = Some(line.into());
@@ -180,6 +200,16 @@ mod tests {
         assert_eq!(e.to_string(), "missing.txt: cannot read the scene file");
         let e = SceneError::at("a.txt", Pos::new(1, 1), "bad").with_source_line("xyz");
         assert_eq!(e.to_string(), "a.txt:1:1: bad\nxyz\n^");
+    }
+
+    #[test]
+    fn invalid_utf8_is_reported_at_its_byte() {
+        let e = String::from_utf8(b"ab\ncd\xffe".to_vec()).unwrap_err();
+        let e = SceneError::invalid_utf8("s.txt", &e);
+        assert_eq!(
+            e.to_string(),
+            "s.txt:2:3: invalid UTF-8 (byte 0xff): scene files are UTF-8 text\ncd\n  ^"
+        );
     }
 
     #[test]

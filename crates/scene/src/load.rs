@@ -4,6 +4,7 @@ use crate::builder::build_scene;
 use crate::error::SceneError;
 use crate::lang::parse_scene;
 use crate::loaded::{LoadOptions, LoadedScene, RenderHints};
+use candela_imageio::Limits;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -18,17 +19,26 @@ pub fn load_scene(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneE
 
 fn load_scene_file(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, SceneError> {
     crate::inputs::record(path);
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::new(path, format!("cannot read the scene file: {e}")))?;
+    let text = read_scene_text(path, &opts.limits)?;
     let is_xml = path
         .extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
-    if is_xml {
+    let mut loaded = if is_xml {
         crate::mitsuba::load_mitsuba(path, &text, opts)
     } else {
         load_candela(path, &text, opts, RenderHints::default())
-    }
+    }?;
+    loaded.inputs.insert(0, path.to_path_buf());
+    Ok(loaded)
+}
+
+/// Reads a scene file: a regular file within the size limit, in UTF-8 (an invalid byte is
+/// reported at its line and column).
+pub fn read_scene_text(path: &Path, limits: &Limits) -> Result<String, SceneError> {
+    let bytes = candela_imageio::input::read_file(path, limits.max_file_bytes)
+        .map_err(|e| SceneError::new(path, format!("cannot read the scene file: {e}")))?;
+    String::from_utf8(bytes).map_err(|e| SceneError::invalid_utf8(path, &e))
 }
 
 /// The `-d` overrides as numbers (the candela language only has float variables).
@@ -64,14 +74,14 @@ fn load_candela(
     if let Some((filter, _)) = desc.filter {
         hints.filter = Some(filter);
     }
-    let (scene, report) = build_scene(&desc, opts.accel)?;
+    let (scene, report) = build_scene(&desc, opts.accel, &opts.limits)?;
     Ok(LoadedScene {
         scene,
         hints,
         warnings: report.warnings,
         mesh_stats: report.bytes_per_triangle.map(|b| (report.triangles, b)),
         local_model_terms: report.local_model_terms,
-        inputs: Vec::new(),
+        inputs: report.inputs,
     })
 }
 

@@ -1,6 +1,7 @@
 //! What loading a scene needs ([`LoadOptions`]) and produces ([`LoadedScene`] with its
 //! [`RenderHints`]), shared by the loader of each format.
 
+use candela_imageio::Limits;
 use candela_render::accel::AccelKind;
 use candela_render::filter::Filter;
 use candela_render::Scene;
@@ -14,6 +15,8 @@ pub struct LoadOptions {
     pub defines: Vec<(String, String)>,
     /// The acceleration structure to build.
     pub accel: AccelKind,
+    /// File sizes, image pixels and the memory meshes may take (`--max-memory`).
+    pub limits: Limits,
 }
 
 /// Render settings a scene file may suggest (Mitsuba's film, sampler and integrator; the demo's
@@ -53,6 +56,52 @@ pub struct LoadedScene {
     /// Where the scene uses terms of the local model only (ambient light, per-light components),
     /// which the physically based integrators ignore.
     pub local_model_terms: Vec<String>,
-    /// The files the load read, the scene file first (empty for the built-in demo).
+    /// Every file the load read, the scene file first (empty for the built-in demo): an output
+    /// path equal to one of them is refused, and partial renders hash their contents.
     pub inputs: Vec<PathBuf>,
+}
+
+/// Largest image width or height (a film's, or the command line's `--width`/`--height`).
+pub const MAX_SIDE: u32 = 1 << 15;
+/// Most samples per pixel (a sampler's `sample_count`, or `--spp`).
+pub const MAX_SPP: u32 = 1 << 20;
+
+/// Most shapes a scene may place (instances of instances count each copy).
+pub const MAX_SHAPES: usize = 1 << 22;
+/// Most nodes (operands and operations) in one CSG tree, instances expanded.
+pub const MAX_CSG_NODES: usize = 1 << 16;
+/// Bytes of mesh data (each placed copy counted) per byte of `--max-memory`: meshes and their
+/// acceleration structure may take at most half of the budget.
+pub const MESH_MEMORY_FRACTION: f64 = 0.5;
+/// Bytes of acceleration structure per triangle, added to the mesh data in the estimate.
+pub const ACCEL_BYTES_PER_TRIANGLE: f64 = 64.0;
+
+/// Fails with a message naming the limit when `bytes` of meshes exceed what `limits` allow.
+pub fn check_mesh_memory(bytes: f64, triangles: usize, limits: &Limits) -> Result<(), String> {
+    let total = bytes + triangles as f64 * ACCEL_BYTES_PER_TRIANGLE;
+    let max = limits.max_memory as f64 * MESH_MEMORY_FRACTION;
+    if total > max {
+        Err(format!(
+            "the meshes placed so far ({triangles} triangles, every copy counted) need about {:.0} MB, more than half of --max-memory ({:.0} MB); raise --max-memory or place fewer copies",
+            total / 1e6,
+            limits.max_memory as f64 / 1e6
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// Clamps negative and non-finite texels of a texture or environment image to 0 (they would
+/// give negative or NaN radiance) and returns how many were changed.
+pub fn clamp_texels(img: &mut candela_render::Image) -> usize {
+    let mut changed = 0;
+    for px in img.pixels_mut() {
+        let clean = px.map(|x| if x.is_finite() && x > 0.0 { x } else { 0.0 });
+        let same = |a: f32, b: f32| a == b || (a == 0.0 && b == 0.0);
+        if !(same(clean.r, px.r) && same(clean.g, px.g) && same(clean.b, px.b)) {
+            changed += 1;
+            *px = clean;
+        }
+    }
+    changed
 }

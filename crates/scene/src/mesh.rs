@@ -6,23 +6,30 @@
 //! candela's image lookup counts rows from the top, as Mitsuba does). Indices are validated;
 //! faces with an out-of-range index are an error, degenerate faces are dropped.
 
+use candela_imageio::Limits;
 use candela_render::math::{Normal3, Point2, Point3, Transform};
 use candela_render::shape::Mesh;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{BeginList, PropertyAccess, PropertyAccessResult};
 use std::path::Path;
 
+/// A mesh file may take at most this fraction of the memory budget (parsing expands it by up to
+/// this factor).
+pub const MESH_FILE_FRACTION: u64 = 16;
+
 /// Loads `path` (`.obj` or `.ply`, case-insensitive) and moves it by `transform`.
-/// The error is a message for the user (the caller adds the position).
-pub fn load_mesh(path: &Path, transform: &Transform) -> Result<Mesh, String> {
+/// The error is a message for the user (the caller adds the position). The file must be a
+/// regular file of at most `limits.max_memory / MESH_FILE_FRACTION` bytes; an OBJ's `mtllib`
+/// is never opened (candela takes materials from the scene, not from the mesh).
+pub fn load_mesh(path: &Path, transform: &Transform, limits: &Limits) -> Result<Mesh, String> {
     crate::inputs::record(path);
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     let mut mesh = match ext.as_deref() {
-        Some("obj") => load_obj(path)?,
-        Some("ply") => load_ply(path)?,
+        Some("obj") => load_obj(path, &read(path, limits)?)?,
+        Some("ply") => load_ply(path, &read(path, limits)?)?,
         _ => {
             return Err(format!(
                 "'{}': unknown mesh format (use .obj or .ply)",
@@ -54,14 +61,25 @@ fn read_error(path: &Path, e: impl std::fmt::Display) -> String {
     format!("cannot read mesh '{}': {e}", path.display())
 }
 
-fn load_obj(path: &Path) -> Result<Mesh, String> {
+/// The bytes of the mesh file `path`, within the limits.
+fn read(path: &Path, limits: &Limits) -> Result<Vec<u8>, String> {
+    candela_imageio::input::read_file(path, limits.max_memory / MESH_FILE_FRACTION)
+        .map_err(|e| read_error(path, e))
+}
+
+/// Parses an OBJ file held in memory (`path` names it in messages).
+pub fn load_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, String> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| read_error(path, e))?;
+    // Material libraries are not opened: the scene gives the materials.
+    let (models, _) = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| read_error(path, e))?;
     let mut mesh = Mesh::default();
     let mut all_normals = true;
     let mut all_uvs = true;
@@ -216,10 +234,10 @@ impl PropertyAccess for PlyFace {
     }
 }
 
-fn load_ply(path: &Path) -> Result<Mesh, String> {
-    let file = std::fs::File::open(path).map_err(|e| read_error(path, e))?;
-    let file_len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
-    let mut reader = Reader::new(std::io::BufReader::new(file));
+/// Parses a PLY file held in memory (`path` names it in messages).
+pub fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh, String> {
+    let file_len = bytes.len() as u64;
+    let mut reader = Reader::new(std::io::Cursor::new(bytes));
     let vparser = Parser::<PlyVertex>::new();
     let fparser = Parser::<PlyFace>::new();
     let header = vparser
@@ -313,7 +331,12 @@ mod tests {
 
     #[test]
     fn obj_quads_become_two_triangles_with_normals_and_flipped_uv() {
-        let m = load_mesh(&tmp("quad.obj", QUAD_OBJ.as_bytes()), &Transform::IDENTITY).unwrap();
+        let m = load_mesh(
+            &tmp("quad.obj", QUAD_OBJ.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default(),
+        )
+        .unwrap();
         assert_eq!(m.indices.len(), 2);
         assert_eq!(m.normals.len(), m.positions.len());
         assert_eq!(m.uvs.len(), m.positions.len());
@@ -341,7 +364,12 @@ mod tests {
             ascii += &format!("{} {} {} 0 0 1\n", v[0], v[1], v[2]);
         }
         ascii += "4 0 1 2 3\n";
-        let a = load_mesh(&tmp("a.ply", ascii.as_bytes()), &Transform::IDENTITY).unwrap();
+        let a = load_mesh(
+            &tmp("a.ply", ascii.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default(),
+        )
+        .unwrap();
         for (fmt, le) in [("binary_little_endian", true), ("binary_big_endian", false)] {
             let mut b = ply_header(fmt, 4, 1).into_bytes();
             let put_f = |b: &mut Vec<u8>, x: f32| {
@@ -356,7 +384,12 @@ mod tests {
             for i in [0i32, 1, 2, 3] {
                 b.extend(if le { i.to_le_bytes() } else { i.to_be_bytes() });
             }
-            let m = load_mesh(&tmp(&format!("{fmt}.ply"), &b), &Transform::IDENTITY).unwrap();
+            let m = load_mesh(
+                &tmp(&format!("{fmt}.ply"), &b),
+                &Transform::IDENTITY,
+                &Limits::default(),
+            )
+            .unwrap();
             assert_eq!(m, a, "{fmt}");
         }
         assert_eq!(a.indices, vec![[0, 1, 2], [0, 2, 3]]);
@@ -365,22 +398,48 @@ mod tests {
 
     #[test]
     fn bad_files_are_errors_not_panics() {
-        let missing = load_mesh(Path::new("/nonexistent/x.obj"), &Transform::IDENTITY).unwrap_err();
+        let missing = load_mesh(
+            Path::new("/nonexistent/x.obj"),
+            &Transform::IDENTITY,
+            &Limits::default(),
+        )
+        .unwrap_err();
         assert!(missing.contains("x.obj"), "{missing}");
         let mut bad_index = ply_header("ascii", 1, 1);
         bad_index += "0 0 0 0 0 1\n3 0 1 2\n";
-        assert!(
-            load_mesh(&tmp("bad.ply", bad_index.as_bytes()), &Transform::IDENTITY)
-                .unwrap_err()
-                .contains("does not exist")
-        );
+        assert!(load_mesh(
+            &tmp("bad.ply", bad_index.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .unwrap_err()
+        .contains("does not exist"));
         let huge = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nend_header\n";
-        assert!(load_mesh(&tmp("huge.ply", huge.as_bytes()), &Transform::IDENTITY).is_err());
-        assert!(load_mesh(&tmp("garbage.ply", b"not a ply"), &Transform::IDENTITY).is_err());
-        assert!(load_mesh(&tmp("t.stl", b"solid"), &Transform::IDENTITY)
-            .unwrap_err()
-            .contains("unknown mesh format"));
+        assert!(load_mesh(
+            &tmp("huge.ply", huge.as_bytes()),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .is_err());
+        assert!(load_mesh(
+            &tmp("garbage.ply", b"not a ply"),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .is_err());
+        assert!(load_mesh(
+            &tmp("t.stl", b"solid"),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .unwrap_err()
+        .contains("unknown mesh format"));
         let truncated = ply_header("binary_little_endian", 4, 1).into_bytes();
-        assert!(load_mesh(&tmp("trunc.ply", &truncated), &Transform::IDENTITY).is_err());
+        assert!(load_mesh(
+            &tmp("trunc.ply", &truncated),
+            &Transform::IDENTITY,
+            &Limits::default()
+        )
+        .is_err());
     }
 }

@@ -113,7 +113,7 @@ fn the_convex_polygon_covers_its_area() {
     use support::lang::parse;
     let build = |t: &str| {
         let d = parse(t);
-        candela_scene::builder::build_scene(&d, Default::default())
+        candela_scene::builder::build_scene(&d, Default::default(), &Default::default())
             .err()
             .map(|e| format!("{}: {}", e.pos.unwrap_or_default(), e.message))
     };

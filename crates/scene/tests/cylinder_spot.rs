@@ -57,7 +57,8 @@ fn the_candela_language_has_cylinders() {
     let d = support::lang::parse(
         "material m(diffuse(<1, 1, 1>))\nunion(cylinder(m, identity), sphere(m, identity))",
     );
-    let e = candela_scene::builder::build_scene(&d, Default::default()).unwrap_err();
+    let e = candela_scene::builder::build_scene(&d, Default::default(), &Default::default())
+        .unwrap_err();
     assert!(e.message.contains("CSG operands must be solids"), "{e}");
 }
 

@@ -1,6 +1,10 @@
 //! The course's path tracer: at every vertex it spawns `num_of_rays` BSDF-sampled rays (no light
 //! sampling) and applies Russian roulette from a depth limit with survival probability
 //! max(0.05, 1 − max(ρ)).
+//!
+//! The tree of rays grows as `num_of_rays`^depth, so the depth must be finite (at most
+//! [`MAX_BRANCHING_DEPTH`], which also bounds the recursion) and a camera sample traces at most
+//! [`BRANCHING_RAY_BUDGET`] rays: branches beyond the budget are cut (they contribute nothing).
 
 use super::Integrator;
 use crate::color::Rgb;
@@ -9,13 +13,18 @@ use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::stats::RayStats;
 
+/// Deepest path of the branching tracer (its recursion depth).
+pub const MAX_BRANCHING_DEPTH: u32 = 64;
+/// Most rays one camera sample of the branching tracer traces.
+pub const BRANCHING_RAY_BUDGET: u32 = 1 << 16;
+
 /// The course's branching path tracer.
 #[derive(Clone, Copy, Debug)]
 pub struct CoursePath {
     /// Rays spawned at every vertex.
     pub num_of_rays: u32,
-    /// Longest path (bounces); `None` for unlimited (roulette still ends paths).
-    pub max_depth: Option<u32>,
+    /// Longest path (bounces), at most [`MAX_BRANCHING_DEPTH`].
+    pub max_depth: u32,
     /// Depth from which Russian roulette starts.
     pub rr_depth: u32,
 }
@@ -28,7 +37,8 @@ impl Integrator for CoursePath {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Rgb {
-        self.trace(scene, ray, 0, sampler, stats)
+        let mut budget = BRANCHING_RAY_BUDGET;
+        self.trace(scene, ray, 0, &mut budget, sampler, stats)
     }
 }
 
@@ -38,12 +48,14 @@ impl CoursePath {
         scene: &Scene,
         ray: &Ray,
         depth: u32,
+        budget: &mut u32,
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Rgb {
-        if self.max_depth.is_some_and(|m| depth > m) {
+        if depth > self.max_depth.min(MAX_BRANCHING_DEPTH) || *budget == 0 {
             return Rgb::BLACK;
         }
+        *budget -= 1;
         let Some(si) = scene.interact(ray, stats) else {
             return scene.escaped(ray.d.normalize());
         };
@@ -66,8 +78,8 @@ impl CoursePath {
             let u1 = sampler.next_1d();
             let u2 = sampler.next_2d();
             if let Some(bs) = bsdf.sample(si.wo, u1, u2) {
-                sum +=
-                    bs.weight * self.trace(scene, &si.spawn_ray(bs.wi), depth + 1, sampler, stats);
+                let ray = si.spawn_ray(bs.wi);
+                sum += bs.weight * self.trace(scene, &ray, depth + 1, budget, sampler, stats);
             }
         }
         emitted + sum * (scale / self.num_of_rays as f32)

@@ -10,11 +10,11 @@ mod path;
 mod radiosity;
 mod whitted;
 
-pub use course_path::CoursePath;
+pub use course_path::{CoursePath, BRANCHING_RAY_BUDGET, MAX_BRANCHING_DEPTH};
 pub use debug::{Depth, Flat, Normals, OnOff};
 pub use local::{shade, Local};
 pub use path::Path;
-pub use whitted::Whitted;
+pub use whitted::{Whitted, MAX_WHITTED_DEPTH, WHITTED_RAY_BUDGET};
 
 use crate::color::Rgb;
 use crate::math::Ray;
@@ -131,11 +131,7 @@ impl IntegratorKind {
             IntegratorKind::Local => Box::new(Local { shadows: false }),
             IntegratorKind::Direct => Box::new(Local { shadows: true }),
             IntegratorKind::Whitted => Box::new(Whitted {
-                max_depth: match settings.max_depth {
-                    None => 10,
-                    Some(d) if d < 0 => 10_000,
-                    Some(d) => d as u32,
-                },
+                max_depth: whitted_depth(settings.max_depth)?,
             }),
             IntegratorKind::Path => {
                 let max_depth = settings.max_depth.filter(|&d| d >= 0).map(|d| d as u32);
@@ -143,7 +139,7 @@ impl IntegratorKind {
                 if settings.num_of_rays > 1 {
                     Box::new(CoursePath {
                         num_of_rays: settings.num_of_rays,
-                        max_depth,
+                        max_depth: branching_depth(settings.num_of_rays, settings.max_depth)?,
                         rr_depth,
                     })
                 } else {
@@ -166,6 +162,33 @@ impl IntegratorKind {
             integrator,
             radiosity: None,
         })
+    }
+}
+
+/// Whitted's recursion depth for `--max-depth` (`None`: 10; -1: the most,
+/// [`MAX_WHITTED_DEPTH`]), or why it is out of range.
+pub fn whitted_depth(max_depth: Option<i32>) -> Result<u32, String> {
+    match max_depth {
+        None => Ok(10),
+        Some(d) if d < 0 => Ok(MAX_WHITTED_DEPTH),
+        Some(d) if d as u32 > MAX_WHITTED_DEPTH => Err(format!(
+            "--max-depth {d}: whitted follows at most {MAX_WHITTED_DEPTH} reflections and refractions (docs/limits.md)"
+        )),
+        Some(d) => Ok(d as u32),
+    }
+}
+
+/// The depth of the course's branching tracer (`--num-of-rays` N > 1) for `--max-depth`,
+/// which must be given and at most [`MAX_BRANCHING_DEPTH`], or why not.
+pub fn branching_depth(num_of_rays: u32, max_depth: Option<i32>) -> Result<u32, String> {
+    match max_depth {
+        Some(d) if d >= 0 && d as u32 <= MAX_BRANCHING_DEPTH => Ok(d as u32),
+        Some(d) if d >= 0 => Err(format!(
+            "--max-depth {d}: with --num-of-rays {num_of_rays} the depth is at most {MAX_BRANCHING_DEPTH} (docs/limits.md)"
+        )),
+        _ => Err(format!(
+            "--num-of-rays {num_of_rays} needs a finite --max-depth (0 to {MAX_BRANCHING_DEPTH}): the branching tracer traces up to {num_of_rays}^depth rays per sample"
+        )),
     }
 }
 

@@ -18,7 +18,7 @@ pub(super) fn build(
     opts: &RadiosityOptions,
 ) -> Result<(Radiosity, RadiosityOutcome), String> {
     opts.validate()?;
-    let solution = Radiosity::solve(scene, opts);
+    let solution = Radiosity::try_solve(scene, opts)?;
     let outcome = solution.outcome();
     Ok((solution, outcome))
 }

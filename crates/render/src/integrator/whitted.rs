@@ -1,7 +1,14 @@
 //! Whitted's recursive ray tracing (1980): the local model with shadows at every hit, plus the
 //! mirror reflection weighted by k_s and, through dielectrics, Fresnel-weighted reflection and
 //! Snell refraction with total internal reflection:
-//! I = I_local + k_s·I_r + k_t·I_t. Recursion stops at `--max-depth` (default 10).
+//! I = I_local + k_s·I_r + k_t·I_t. Recursion stops at `--max-depth` (default 10, at most
+//! [`MAX_WHITTED_DEPTH`]); a camera ray spawns at most [`WHITTED_RAY_BUDGET`] rays (glass
+//! doubles the rays at every depth), branches beyond it are not followed.
+
+/// Deepest recursion of Whitted's tracer (`--max-depth`; -1 means this).
+pub const MAX_WHITTED_DEPTH: u32 = 100;
+/// Most reflected and refracted rays one camera ray spawns (a full tree of depth 11).
+pub const WHITTED_RAY_BUDGET: u32 = 4096;
 
 use super::local::shade;
 use super::Integrator;
@@ -27,7 +34,8 @@ impl Integrator for Whitted {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Rgb {
-        self.trace(scene, ray, 0, sampler, stats)
+        let mut budget = WHITTED_RAY_BUDGET;
+        self.trace(scene, ray, 0, &mut budget, sampler, stats)
     }
 }
 
@@ -37,6 +45,7 @@ impl Whitted {
         scene: &Scene,
         ray: &Ray,
         depth: u32,
+        budget: &mut u32,
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> Rgb {
@@ -44,9 +53,11 @@ impl Whitted {
             return scene.escaped(ray.d.normalize());
         };
         let mut l = shade(scene, &si, true, sampler, stats);
-        if depth >= self.max_depth {
+        if depth >= self.max_depth.min(MAX_WHITTED_DEPTH) || *budget < 2 {
             return l;
         }
+        // Both children are paid for up front, so that a refraction is never cut alone.
+        *budget -= 2;
         let w = scene.material(&si).whitted(si.uv, si.ns.dot_vec(si.wo));
         let wo = si.wo;
         match w.refract {
@@ -57,16 +68,19 @@ impl Whitted {
                 let (f, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, eta);
                 let nf = if cos_i >= 0.0 { n } else { -n };
                 let r = reflect(wo, nf);
-                l += w.reflect * f * self.trace(scene, &si.spawn_ray(r), depth + 1, sampler, stats);
+                l += w.reflect
+                    * f
+                    * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
                 if f < 1.0 {
                     let t = refract(wo, n, cos_t, eta_ti);
-                    let lt = self.trace(scene, &si.spawn_ray(t), depth + 1, sampler, stats);
+                    let lt = self.trace(scene, &si.spawn_ray(t), depth + 1, budget, sampler, stats);
                     l += kt * lt * ((1.0 - f) * eta_ti * eta_ti);
                 }
             }
             None if !w.reflect.is_black() => {
                 let r = reflect(wo, si.facing_shading_normal().to_vec());
-                l += w.reflect * self.trace(scene, &si.spawn_ray(r), depth + 1, sampler, stats);
+                l += w.reflect
+                    * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
             }
             None => {}
         }

@@ -37,10 +37,62 @@ struct Solved {
 impl Radiosity {
     /// Meshes, computes form factors, solves and refines, or loads the solution from
     /// `opts.cache` when it matches the scene and the options.
+    ///
+    /// Non-finite emission or reflectance (which no solve can converge on) is taken as 0 on the
+    /// initial patches, and the solver stops as soon as its residual is not finite; see
+    /// [`Radiosity::try_solve`] to refuse such input instead.
     pub fn solve(scene: &Scene, opts: &RadiosityOptions) -> Radiosity {
+        match Self::solve_inner(scene, opts, false) {
+            Ok(r) => r,
+            Err(_) => unreachable!("non-finite input is cleaned, not refused"),
+        }
+    }
+
+    /// Checks cache bytes against `scene` and `opts` as a solve would (format, checksum,
+    /// fingerprint, replayed refinement, counts and values) without solving; `Err` says why
+    /// the cache would not be used.
+    pub fn check_cache(scene: &Scene, opts: &RadiosityOptions, bytes: &[u8]) -> Result<(), String> {
+        let mut m = mesh::Meshing::build(scene, opts.patch_size, opts.cull_hidden_sides);
+        let fingerprint = cache::fingerprint(scene, opts, m.patch_size);
+        match cache::decode(bytes, fingerprint) {
+            Ok(d) => replay(&mut m, scene, &d),
+            Err(cache::CacheError::Stale) => Err("stale".into()),
+            Err(cache::CacheError::Invalid(e)) => Err(e),
+        }
+    }
+
+    /// As [`Radiosity::solve`], but a patch with a non-finite emission or reflectance is an
+    /// error, found before any form factor is computed.
+    pub fn try_solve(scene: &Scene, opts: &RadiosityOptions) -> Result<Radiosity, String> {
+        Self::solve_inner(scene, opts, true)
+    }
+
+    fn solve_inner(
+        scene: &Scene,
+        opts: &RadiosityOptions,
+        refuse: bool,
+    ) -> Result<Radiosity, String> {
         let start = Instant::now();
-        let build = || mesh::Meshing::build(scene, opts.patch_size, opts.cull_hidden_sides);
-        let mut m = build();
+        let build = || {
+            let mut m = mesh::Meshing::build(scene, opts.patch_size, opts.cull_hidden_sides);
+            let mut bad = None;
+            for (i, p) in m.patches.iter_mut().enumerate() {
+                for v in p.emit.iter_mut().chain(p.rho.iter_mut()) {
+                    if !v.is_finite() {
+                        bad.get_or_insert(i);
+                        *v = 0.0;
+                    }
+                }
+            }
+            (m, bad)
+        };
+        let (mut m, bad) = build();
+        if let (true, Some(i)) = (refuse, bad) {
+            return Err(format!(
+                "patch {i} (element {}) has a non-finite emission or reflectance: the radiosity solve is refused",
+                m.patches[i].elem
+            ));
+        }
         let seconds_mesh = start.elapsed().as_secs_f64();
         let fingerprint = cache::fingerprint(scene, opts, m.patch_size);
         let mut report = RadiosityReport {
@@ -68,11 +120,11 @@ impl Radiosity {
                             report,
                             fingerprint,
                         };
-                        return Self::finish(scene, opts, solved, start);
+                        return Ok(Self::finish(scene, opts, solved, start));
                     }
                     Err(e) => {
                         report.cache = CacheStatus::Invalid(e);
-                        m = build();
+                        m = build().0;
                     }
                 },
                 Err(cache::CacheError::Stale) => report.cache = CacheStatus::Stale,
@@ -87,7 +139,7 @@ impl Radiosity {
             report,
             fingerprint,
         };
-        Self::finish(scene, opts, solved, start)
+        Ok(Self::finish(scene, opts, solved, start))
     }
 
     /// The solution shown as `opts` says, its report completed (`start`: when solving began).
@@ -181,6 +233,22 @@ fn replay(m: &mut mesh::Meshing, scene: &Scene, d: &cache::CacheData) -> Result<
         || d.hidden.len() != m.patches.len()
     {
         return Err("the mesh does not match".to_string());
+    }
+    // The values must be a radiosity of this mesh: finite, at least the emission, and no
+    // reflected light on a channel that reflects nothing.
+    for (i, (b, p)) in d.b.iter().zip(&m.patches).enumerate() {
+        for c in 0..3 {
+            let reflected = b[c] - p.emit[c];
+            let tol = 1e-9 * (1.0 + b[c].abs() + p.emit[c].abs());
+            if !(b[c].is_finite() && b[c] < 1e30 && reflected >= -tol)
+                || (p.rho[c] == 0.0 && reflected.abs() > tol)
+            {
+                return Err(format!(
+                    "patch {i}: radiosity {} out of range (emission {}, reflectance {})",
+                    b[c], p.emit[c], p.rho[c]
+                ));
+            }
+        }
     }
     Ok(())
 }

@@ -176,6 +176,10 @@ pub(crate) fn gauss_seidel(
         }
         sweeps += 1;
         converged = delta / norm <= threshold;
+        if !delta.is_finite() {
+            // Non-finite input never converges: stop at once (reported as not converged).
+            break;
+        }
     }
     // The true residual of the final B.
     let mut res = 0f64;
@@ -272,7 +276,7 @@ pub(crate) fn progressive(
             }
         }
         fraction = total / norm;
-        if fraction <= threshold || power.is_empty() {
+        if fraction <= threshold || power.is_empty() || !fraction.is_finite() {
             break;
         }
         let k = BATCH.min(power.len());

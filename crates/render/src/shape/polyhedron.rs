@@ -59,10 +59,7 @@ impl Polyhedron {
             }
             planes.push((n / len, d / len));
         }
-        if recession_direction(&planes) {
-            return Err(PolyhedronError::Unbounded);
-        }
-        let local = vertex_bounds(&planes).ok_or(PolyhedronError::Empty)?;
+        let local = clipped_bounds(&planes)?;
         let d = local.diagonal();
         if d.x <= 0.0 || d.y <= 0.0 || d.z <= 0.0 {
             return Err(PolyhedronError::Empty);
@@ -148,55 +145,143 @@ impl Polyhedron {
     }
 }
 
-/// True when some direction u ≠ 0 has n·u ≤ 0 for every plane (the region is unbounded).
-/// The extreme rays of that cone are crossings of two planes (±nᵢ × nⱼ).
-fn recession_direction(planes: &[(Vec3, f32)]) -> bool {
-    let mut any_candidate = false;
-    for (i, &(a, _)) in planes.iter().enumerate() {
-        for &(b, _) in &planes[i + 1..] {
-            let u = a.cross(b);
-            let len = u.norm();
-            if len < 1e-6 {
-                continue;
-            }
-            any_candidate = true;
-            let u = u / len;
-            for dir in [u, -u] {
-                if planes.iter().all(|&(n, _)| n.dot(dir) <= 1e-6) {
-                    return true;
-                }
-            }
+/// Half the side of the box the half-spaces are clipped from: a polyhedron reaching it is
+/// unbounded (or larger than any scene).
+const BIG: f64 = 1e9;
+
+/// The box of the vertices of ∩ {n·x ≤ d}, found by clipping a huge box by each half-space in
+/// turn (its faces as convex polygons, Sutherland–Hodgman on each, the cut closed by a new
+/// face). Each clip touches every vertex once and a polyhedron of n planes has O(n) vertices,
+/// so the whole is O(n²) in the worst case.
+/// The clipping runs twice: from the huge box to find the solid, then from a box just larger
+/// than what was found, so that the vertices have the precision of the solid's own size.
+fn clipped_bounds(planes: &[(Vec3, f32)]) -> Result<Bounds3, PolyhedronError> {
+    let rough = clip_box(planes, [-BIG; 3], [BIG; 3])?;
+    let mut lo = [0.0; 3];
+    let mut hi = [0.0; 3];
+    for p in &rough {
+        if p.iter().any(|x| x.abs() >= BIG * 0.5) {
+            return Err(PolyhedronError::Unbounded);
         }
     }
-    !any_candidate
+    for i in 0..3 {
+        lo[i] = rough.iter().map(|p| p[i]).fold(f64::INFINITY, f64::min);
+        hi[i] = rough.iter().map(|p| p[i]).fold(f64::NEG_INFINITY, f64::max);
+    }
+    let margin = 0.01 * (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max) + 1e-3;
+    let fine = clip_box(planes, lo.map(|x| x - margin), hi.map(|x| x + margin))?;
+    let mut b = Bounds3::EMPTY;
+    for p in fine {
+        b = b.union_point(crate::math::Point3::new(
+            p[0] as f32,
+            p[1] as f32,
+            p[2] as f32,
+        ));
+    }
+    Ok(b)
 }
 
-/// The box of the vertices (crossings of three planes inside all half-spaces).
-fn vertex_bounds(planes: &[(Vec3, f32)]) -> Option<Bounds3> {
-    let mut b = Bounds3::EMPTY;
-    let n = planes.len();
-    for i in 0..n {
-        for j in i + 1..n {
-            for k in j + 1..n {
-                let (a, b1, c) = (planes[i], planes[j], planes[k]);
-                let det = a.0.dot(b1.0.cross(c.0));
-                if det.abs() < 1e-9 {
-                    continue;
-                }
-                // Cramer's rule for x with nᵢ·x = dᵢ for the three planes.
-                let x =
-                    (b1.0.cross(c.0) * a.1 + c.0.cross(a.0) * b1.1 + a.0.cross(b1.0) * c.1) / det;
-                let scale = 1.0 + x.norm();
-                if planes
-                    .iter()
-                    .all(|&(pn, pd)| pn.dot(x) <= pd + 1e-5 * scale)
-                {
-                    b = b.union_point(x.to_point());
-                }
-            }
+/// The vertices of the box [lo, hi] clipped by every half-space (see [`clipped_bounds`]).
+fn clip_box(
+    planes: &[(Vec3, f32)],
+    lo: [f64; 3],
+    hi: [f64; 3],
+) -> Result<Vec<[f64; 3]>, PolyhedronError> {
+    type P = [f64; 3];
+    let dot = |a: P, b: P| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let lerp = |a: P, b: P, t: f64| {
+        [
+            a[0] + (b[0] - a[0]) * t,
+            a[1] + (b[1] - a[1]) * t,
+            a[2] + (b[2] - a[2]) * t,
+        ]
+    };
+    // The six faces of the box, each a polygon.
+    let pick = |i: usize, side: bool| if side { hi[i] } else { lo[i] };
+    let mut faces: Vec<Vec<P>> = Vec::with_capacity(6);
+    for axis in 0..3 {
+        for side in [false, true] {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let face = [(false, false), (true, false), (true, true), (false, true)]
+                .into_iter()
+                .map(|(a, b)| {
+                    let mut p = [0.0; 3];
+                    p[axis] = pick(axis, side);
+                    p[u] = pick(u, a);
+                    p[v] = pick(v, b);
+                    p
+                })
+                .collect();
+            faces.push(face);
         }
     }
-    (!b.is_empty()).then_some(b)
+    for &(n, d) in planes {
+        let n = [n.x as f64, n.y as f64, n.z as f64];
+        let d = d as f64;
+        let tol = 1e-6 * (1.0 + d.abs());
+        let mut kept = Vec::with_capacity(faces.len() + 1);
+        let mut cut: Vec<P> = Vec::new();
+        for face in faces {
+            let dist: Vec<f64> = face.iter().map(|&p| dot(n, p) - d).collect();
+            if dist.iter().all(|&x| x <= tol) {
+                cut.extend(
+                    face.iter()
+                        .zip(&dist)
+                        .filter(|(_, &x)| x >= -tol)
+                        .map(|(p, _)| *p),
+                );
+                kept.push(face);
+                continue;
+            }
+            let mut out = Vec::with_capacity(face.len() + 1);
+            for i in 0..face.len() {
+                let j = (i + 1) % face.len();
+                let (a, b, da, db) = (face[i], face[j], dist[i], dist[j]);
+                if da <= tol {
+                    out.push(a);
+                    if da >= -tol {
+                        cut.push(a);
+                    }
+                }
+                if (da < -tol && db > tol) || (da > tol && db < -tol) {
+                    let p = lerp(a, b, da / (da - db));
+                    out.push(p);
+                    cut.push(p);
+                }
+            }
+            if out.len() >= 3 {
+                kept.push(out);
+            }
+        }
+        if cut.len() >= 3 {
+            // The new face: the cut points in angular order around their centroid.
+            let k = cut.len() as f64;
+            let c = cut.iter().fold([0.0; 3], |s, p| {
+                [s[0] + p[0] / k, s[1] + p[1] / k, s[2] + p[2] / k]
+            });
+            let frame =
+                Frame::from_normal(Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32).to_normal());
+            let (fs, ft) = (frame.s, frame.t);
+            let (fs, ft) = (
+                [fs.x as f64, fs.y as f64, fs.z as f64],
+                [ft.x as f64, ft.y as f64, ft.z as f64],
+            );
+            let angle = |p: &P| {
+                let q = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+                dot(q, ft).atan2(dot(q, fs))
+            };
+            cut.sort_by(|a, b| angle(a).total_cmp(&angle(b)));
+            cut.dedup_by(|a, b| (0..3).all(|i| (a[i] - b[i]).abs() <= tol));
+            if cut.len() >= 3 {
+                kept.push(cut);
+            }
+        }
+        faces = kept;
+        if faces.is_empty() {
+            return Err(PolyhedronError::Empty);
+        }
+    }
+    Ok(faces.into_iter().flatten().collect())
 }
 
 impl Polyhedron {
@@ -296,5 +381,27 @@ mod tests {
             Polyhedron::new(Transform::IDENTITY, &[(Vec3::ZERO, 1.0)]),
             Err(PolyhedronError::BadNormal(0))
         );
+    }
+
+    /// 2000 half-spaces tangent to the unit sphere (a Fibonacci lattice of normals): the
+    /// clipping is O(n²), so this takes milliseconds, and the box is the sphere's.
+    #[test]
+    fn thousands_of_half_spaces_are_fast() {
+        let n = 2000;
+        let planes: Vec<(Vec3, f32)> = (0..n)
+            .map(|i| {
+                let z = 1.0 - (2.0 * i as f32 + 1.0) / n as f32;
+                let r = (1.0 - z * z).sqrt();
+                let phi = i as f32 * 2.399_963;
+                (Vec3::new(r * phi.cos(), r * phi.sin(), z), 1.0)
+            })
+            .collect();
+        let start = std::time::Instant::now();
+        let p = Polyhedron::new(Transform::IDENTITY, &planes).unwrap();
+        assert!(start.elapsed().as_secs_f64() < 2.0, "{:?}", start.elapsed());
+        let b = p.bounds();
+        for v in [b.max.x, b.max.y, b.max.z, -b.min.x, -b.min.y, -b.min.z] {
+            assert!((1.0..1.01).contains(&v), "{b:?}");
+        }
     }
 }

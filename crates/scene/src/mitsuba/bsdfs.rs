@@ -347,8 +347,9 @@ impl<'t> Loader<'t> {
             return Ok(i.clone());
         }
         crate::inputs::record(&path);
-        let mut img = candela_imageio::read_image(&path)
+        let mut img = candela_imageio::read_image_within(&path, &self.limits)
             .map_err(|e| self.err(pos, format!("cannot load image '{name}': {e}")))?;
+        self.inputs.push(path.clone());
         if img.width() == 0 || img.height() == 0 {
             return Err(self.err(pos, format!("image '{name}' is empty")));
         }
@@ -356,6 +357,13 @@ impl<'t> Loader<'t> {
             for px in img.pixels_mut() {
                 *px = px.map(candela_imageio::tonemap::srgb_oetf);
             }
+        }
+        let clamped = crate::loaded::clamp_texels(&mut img);
+        if clamped > 0 {
+            self.warn(
+                pos,
+                format!("image '{name}': {clamped} texels negative or not finite, clamped to 0"),
+            );
         }
         let img = Arc::new(img);
         self.images.insert((path, raw), img.clone());

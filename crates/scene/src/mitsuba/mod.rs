@@ -155,6 +155,8 @@ fn load_tree(
         has_sensor: false,
         triangles: 0,
         mesh_bytes: 0.0,
+        limits: opts.limits,
+        inputs: Vec::new(),
     };
     for d in unused_defines {
         l.warnings.push(format!(
@@ -170,6 +172,7 @@ fn load_tree(
         has_sensor,
         triangles,
         mesh_bytes,
+        inputs,
         ..
     } = l;
     let mut scene = scene.build(opts.accel);
@@ -186,7 +189,7 @@ fn load_tree(
         warnings,
         mesh_stats: (triangles > 0).then(|| (triangles, mesh_bytes / triangles as f64)),
         local_model_terms: Vec::new(),
-        inputs: Vec::new(),
+        inputs,
     })
 }
 
@@ -273,6 +276,10 @@ struct Loader<'t> {
     sources: &'t Sources,
     triangles: usize,
     mesh_bytes: f64,
+    /// File sizes, image pixels, mesh memory.
+    limits: candela_imageio::Limits,
+    /// The files read (meshes, images).
+    inputs: Vec<PathBuf>,
 }
 
 impl<'t> Loader<'t> {

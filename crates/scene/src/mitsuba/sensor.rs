@@ -32,7 +32,8 @@ impl<'t> Loader<'t> {
         }
         if let Some((s, _)) = p.object("sampler")? {
             let sp = self.props(s)?;
-            self.hints.spp = Some(sp.int_in("sample_count", 4, (1, u32::MAX as i64))? as u32);
+            self.hints.spp =
+                Some(sp.int_in("sample_count", 4, (1, crate::loaded::MAX_SPP as i64))? as u32);
             sp.ignore(&["seed", "jitter", "dimension", "scramble"]);
             self.finish(&sp);
         }
@@ -217,7 +218,7 @@ impl<'t> Loader<'t> {
                 ),
             );
         }
-        const MAX: i64 = 1 << 16;
+        const MAX: i64 = crate::loaded::MAX_SIDE as i64;
         let w = p.int_in("width", 768, (1, MAX))? as u32;
         let h = p.int_in("height", 576, (1, MAX))? as u32;
         let crop = (

@@ -166,14 +166,22 @@ impl<'t> Loader<'t> {
                             }
                             (m, face_normals)
                         } else {
-                            (crate::mesh::load_mesh(&path, &Transform::IDENTITY).map_err(|msg| self.err(pos, msg))?, false)
+                            (crate::mesh::load_mesh(&path, &Transform::IDENTITY, &self.limits).map_err(|msg| self.err(pos, msg))?, false)
                         };
                         let m = Arc::new(m);
+                        self.inputs.push(path.clone());
                         self.meshes.insert(key, m.clone());
                         m
                     }
                 };
                 let (loaded, file_face_normals) = (&loaded.0, loaded.1);
+                // Each placement is a copy: refused before it is made when over the limit.
+                crate::loaded::check_mesh_memory(
+                    self.mesh_bytes + crate::mesh::bytes_per_triangle(loaded) * loaded.len() as f64,
+                    self.triangles + loaded.len(),
+                    &self.limits,
+                )
+                .map_err(|msg| self.err(pos, msg))?;
                 let mut mesh = (*loaded).clone();
                 if kind == "obj" && !p.or("flip_tex_coords", true)? {
                     // candela's OBJ reader already flips v, as Mitsuba does by default.

@@ -5,7 +5,12 @@
 use crate::error::{Pos, SceneError, SourceFile};
 
 /// Deepest element nesting accepted (real scenes need a handful of levels).
-const MAX_DEPTH: usize = 128;
+pub const MAX_DEPTH: usize = 128;
+/// Longest attribute value after `$name` substitution, in bytes (defaults that refer to each
+/// other could otherwise grow exponentially).
+pub const MAX_EXPANDED: usize = 1 << 16;
+/// Most XML nodes (elements, text, comments) in a file.
+pub const MAX_NODES: u32 = 1 << 22;
 
 /// An XML element after parameter substitution.
 #[derive(Debug)]
@@ -104,14 +109,32 @@ pub(super) fn parse(
     let text: &str = &src.text;
     let opts = roxmltree::ParsingOptions {
         allow_dtd: false,
+        nodes_limit: MAX_NODES,
         ..roxmltree::ParsingOptions::default()
     };
     let doc = roxmltree::Document::parse_with_options(text, opts).map_err(|e| {
-        let p = e.pos();
+        let lines = LineIndex::new(text);
+        let p = match e {
+            // Errors about the end of the file are reported there, not at 1:1.
+            roxmltree::Error::UnexpectedEndOfStream
+            | roxmltree::Error::UnclosedRootNode
+            | roxmltree::Error::NoRootNode => lines.pos(text.len()),
+            roxmltree::Error::DtdDetected => lines.pos(text.find("<!DOCTYPE").unwrap_or(0)),
+            _ => {
+                let p = e.pos();
+                Pos::new(p.row, p.col)
+            }
+        };
+        if matches!(e, roxmltree::Error::NodesLimitReached) {
+            return src.error(
+                p,
+                format!("the file has more than {MAX_NODES} XML nodes (see docs/limits.md)"),
+            );
+        }
         let msg = e.to_string();
         // roxmltree ends its messages with " at line:col"; the position is shown anyway.
         let msg = msg.rsplit_once(" at ").map_or(msg.as_str(), |(m, _)| m);
-        src.error(Pos::new(p.row, p.col), format!("malformed XML: {msg}"))
+        src.error(p, format!("malformed XML: {msg}"))
     })?;
     let mut params: Vec<Param> = defines
         .iter()
@@ -214,6 +237,13 @@ impl Parser<'_> {
                 match best {
                     Some(p) => {
                         p.used = true;
+                        if out.len() + p.value.len() > MAX_EXPANDED {
+                            let name = p.name.clone();
+                            return Err(self.src.error(
+                                self.lines.pos(start),
+                                format!("the value grows to more than {MAX_EXPANDED} bytes when ${name} is substituted (defaults that refer to each other?); see docs/limits.md"),
+                            ));
+                        }
                         out.push_str(&p.value);
                         let n = p.name.len();
                         rest = &after[n..];

@@ -71,8 +71,10 @@ pub fn parse_scene_file(
     path: &Path,
     overrides: &HashMap<String, f32>,
 ) -> Result<SceneDescription, SceneError> {
-    let text = std::fs::read_to_string(path)
+    let limits = candela_imageio::Limits::default();
+    let bytes = candela_imageio::input::read_file(path, limits.max_file_bytes)
         .map_err(|e| SceneError::new(path, format!("cannot read the scene file: {e}")))?;
+    let text = String::from_utf8(bytes).map_err(|e| SceneError::invalid_utf8(path, &e))?;
     parse_scene(&text, path, overrides)
 }
 

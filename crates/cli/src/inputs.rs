@@ -1,0 +1,206 @@
+//! Everything checked before any work (docs/command-line.md, docs/limits.md): option values
+//! and combinations, the memory budget (`--max-memory`) and what a render of a given size needs,
+//! and the radiosity cache file. A failure here is a usage error (exit status 2) naming the
+//! option.
+
+use crate::args::{Command, RenderArgs};
+use crate::exit::Usage;
+use candela_imageio::Limits;
+use candela_render::accel::AccelKind;
+use candela_render::integrator::{branching_depth, whitted_depth, IntegratorKind};
+use candela_render::radiosity::{FormFactorMethod, SolverKind};
+use candela_render::sampling::SamplerKind;
+use std::path::{Path, PathBuf};
+
+/// Bytes a rendered pixel takes (the film's fixed-point sums and counts, the image, the encoded
+/// outputs), for the estimate made before rendering.
+pub const RENDER_BYTES_PER_PIXEL: u64 = 96;
+
+/// The memory budget: `--max-memory`, or 2 GiB, or half the address-space limit when that is
+/// lower (`ulimit -v`).
+pub fn max_memory(option: Option<u64>) -> u64 {
+    option.unwrap_or_else(|| {
+        let default = candela_imageio::input::DEFAULT_MAX_MEMORY;
+        address_space_limit().map_or(default, |l| default.min(l / 2))
+    })
+}
+
+/// The process's address-space limit (`RLIMIT_AS`), read from `/proc/self/limits`.
+fn address_space_limit() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line.split_whitespace().nth(3)?.parse().ok()
+}
+
+/// The limits of readers for these options.
+pub fn limits(args: &RenderArgs) -> Limits {
+    Limits::from_memory(max_memory(args.max_memory))
+}
+
+/// Checks a command's options before any file is read.
+pub fn validate(command: &Command) -> Result<(), Usage> {
+    match command {
+        Command::Demo(a) => {
+            render_args(a, false)?;
+            crate::outputs::check(&crate::outputs::resolve(&a.outputs, "demo.png"), &[])
+        }
+        Command::Render(s) => {
+            let xml = s
+                .scene
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+            render_args(&s.render, xml)?;
+            if let Some(cache) = &s.render.radiosity_cache {
+                if crate::outputs::same_file(cache, &s.scene) {
+                    return Err(Usage(format!(
+                        "--radiosity-cache '{}' is the scene file",
+                        cache.display()
+                    )));
+                }
+            }
+            let outputs = crate::outputs::resolve(&s.render.outputs, &default_output(&s.scene));
+            let mut inputs = vec![s.scene.clone()];
+            inputs.extend(s.render.radiosity_cache.iter().cloned());
+            crate::outputs::check(&outputs, &inputs)
+        }
+        Command::Convert(c) => crate::outputs::check(
+            std::slice::from_ref(&c.output),
+            std::slice::from_ref(&c.input),
+        ),
+        Command::Denoise(d) => crate::outputs::check(
+            std::slice::from_ref(&d.output),
+            std::slice::from_ref(&d.input),
+        ),
+        Command::Merge(m) => {
+            // Image outputs as any other; partial-file outputs are checked by `merge`.
+            let images: Vec<PathBuf> = m
+                .outputs
+                .iter()
+                .filter(|o| candela_imageio::supported_extension(o))
+                .cloned()
+                .collect();
+            crate::outputs::check(&images, &m.parts)
+        }
+    }
+}
+
+/// The default output of `render SCENE`: the scene's name with `.png`, in the current folder.
+pub fn default_output(scene: &Path) -> String {
+    let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
+    format!("{stem}.png")
+}
+
+fn render_args(a: &RenderArgs, xml: bool) -> Result<(), Usage> {
+    let integrator = match &a.integrator {
+        None => None,
+        Some(name) => Some(IntegratorKind::from_name(name).ok_or_else(|| {
+            Usage(format!(
+                "--integrator '{name}': unknown integrator (expected one of: {})",
+                IntegratorKind::NAMES.join(", ")
+            ))
+        })?),
+    };
+    if let Some(name) = &a.sampler {
+        SamplerKind::from_name(name).ok_or_else(|| {
+            Usage(format!(
+                "--sampler '{name}': unknown sampler (expected one of: {})",
+                SamplerKind::NAMES.join(", ")
+            ))
+        })?;
+    }
+    if let Some(name) = &a.accel {
+        AccelKind::parse(name).map_err(|e| Usage(format!("--accel '{name}': {e}")))?;
+    }
+    if let Some(name) = &a.form_factors {
+        FormFactorMethod::from_name(name).ok_or_else(|| {
+            Usage(format!(
+                "--form-factors '{name}': unknown form-factor method (expected one of: {})",
+                FormFactorMethod::NAMES.join(", ")
+            ))
+        })?;
+    }
+    if let Some(name) = &a.solver {
+        SolverKind::from_name(name).ok_or_else(|| {
+            Usage(format!(
+                "--solver '{name}': unknown radiosity solver (expected one of: {})",
+                SolverKind::NAMES.join(", ")
+            ))
+        })?;
+    }
+    for d in &a.defines {
+        let (name, _) = d
+            .split_once('=')
+            .or_else(|| d.split_once(':'))
+            .ok_or_else(|| Usage(format!("--define '{d}': expected NAME=VALUE or NAME:VALUE")))?;
+        if name.trim().is_empty() {
+            return Err(Usage(format!("--define '{d}': the name is empty")));
+        }
+    }
+    // Depths: an XML scene may set the integrator and its depth, checked when it is loaded.
+    let kind = integrator.or((!xml).then_some(IntegratorKind::Path));
+    match kind {
+        Some(IntegratorKind::Whitted) => {
+            whitted_depth(a.max_depth).map_err(Usage)?;
+        }
+        Some(IntegratorKind::Path) => {
+            let n = a.num_of_rays.unwrap_or(1);
+            if n > 1 && (a.max_depth.is_some() || !xml) {
+                branching_depth(n, a.max_depth).map_err(Usage)?;
+            }
+        }
+        _ => {}
+    }
+    // The image: the command line's size, or the default one (an XML film is checked after
+    // loading).
+    if !xml || (a.width.is_some() && a.height.is_some()) {
+        let w = a.width.unwrap_or(640);
+        let h = a.height.unwrap_or(480);
+        render_memory(w as usize, h as usize, max_memory(a.max_memory))?;
+    }
+    if let Some(cache) = &a.radiosity_cache {
+        candela_imageio::check_target(cache)
+            .map_err(|e| Usage(format!("--radiosity-cache '{}': {e}", cache.display())))?;
+    }
+    Ok(())
+}
+
+/// Fails unless a `width`×`height` render fits in the memory budget `max_memory`.
+pub fn render_memory(width: usize, height: usize, max_memory: u64) -> Result<(), Usage> {
+    let need = (width as u64)
+        .saturating_mul(height as u64)
+        .saturating_mul(RENDER_BYTES_PER_PIXEL);
+    if need > max_memory {
+        return Err(Usage(format!(
+            "--width/--height: a {width}×{height} image needs about {} MB ({RENDER_BYTES_PER_PIXEL} bytes per pixel), more than --max-memory {} MB; raise --max-memory or render a smaller image",
+            need.div_ceil(1 << 20),
+            max_memory >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// Checks what the loaded scene decided (an XML film's size) against the memory budget.
+pub fn check_render(width: usize, height: usize, args: &RenderArgs) -> anyhow::Result<()> {
+    render_memory(width, height, max_memory(args.max_memory)).map_err(anyhow::Error::new)
+}
+
+/// Reads the radiosity cache: a regular file of at most a quarter of the memory budget.
+pub fn read_cache(path: &Path, args: &RenderArgs) -> std::io::Result<Vec<u8>> {
+    use candela_imageio::input::{read_file, InputError};
+    read_file(path, limits(args).max_file_bytes).map_err(|e| match e {
+        InputError::Io(e) => e,
+        e => std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn huge_images_are_refused_naming_the_option() {
+        let e = render_memory(32768, 32768, 2 << 30).unwrap_err();
+        assert!(e.0.contains("--max-memory"), "{e}");
+        assert!(render_memory(640, 480, 2 << 30).is_ok());
+    }
+}

@@ -1,0 +1,11 @@
+//! Feeds arbitrary bytes to the PLY mesh reader: it must return a mesh or an error, never panic.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use std::path::Path;
+
+fuzz_target!(|bytes: &[u8]| {
+    if let Err(e) = candela_scene::mesh::load_ply(Path::new("fuzz.ply"), bytes) {
+        let _ = e.to_string();
+    }
+});
