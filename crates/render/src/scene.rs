@@ -9,6 +9,7 @@ use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::light::{AreaLight, Emission, Light};
 use crate::material::{Material, MaterialId};
 use crate::math::{Point3, Ray, RayBatch, Transform, Vec3};
+use crate::sampling::pcg::hash2;
 use crate::shape::{Mesh, Shape, ShearedRay};
 use crate::stats::RayStats;
 
@@ -33,7 +34,12 @@ pub struct Scene {
     pub infinite_lights: Vec<u32>,
     /// The ambient intensity I_a of the local model (sum of `ambient_light`s).
     pub ambient: Rgb,
+    /// True when a material has a stochastic opacity (see [`Material::opacity`]).
+    pub has_masks: bool,
 }
+
+/// The most masked surfaces a ray passes through before the next one counts as a hit.
+const MAX_MASK_LAYERS: usize = 256;
 
 impl Scene {
     /// The radiance arriving from direction `d` along a ray that escaped the scene.
@@ -45,9 +51,57 @@ impl Scene {
             })
     }
 
-    /// The closest hit along `ray`.
+    /// The closest hit along `ray`. A surface with a stochastic opacity α is hit with
+    /// probability α and passed through otherwise; the choice is a hash of the ray and the hit
+    /// distance (deterministic, no sample dimension used, the same for a ray traced alone or
+    /// in a batch).
     #[inline]
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
+        let hit = self.intersect_opaque(ray, stats);
+        if !self.has_masks {
+            return hit;
+        }
+        self.through_masks(ray, hit, stats)
+    }
+
+    /// `hit` (the closest hit of `ray` counting every surface), or the first hit beyond it
+    /// that the stochastic opacities keep.
+    #[inline(never)]
+    fn through_masks(&self, ray: &Ray, mut hit: Option<Hit>, stats: &mut RayStats) -> Option<Hit> {
+        let mut r = *ray;
+        for _ in 0..MAX_MASK_LAYERS {
+            let h = hit?;
+            if !self.passes_through(&r, &h) {
+                return Some(h);
+            }
+            r.tmin = h.t;
+            hit = self.intersect_opaque(&r, stats);
+        }
+        hit
+    }
+
+    /// True when the ray passes through the surface of `h` (a masked material, and a uniform
+    /// number hashed from the ray and `h.t` at or above the opacity there).
+    fn passes_through(&self, ray: &Ray, h: &Hit) -> bool {
+        let si = self.geometry.interaction(ray, h);
+        let Some(opacity) = &self.materials[si.props.material as usize].opacity else {
+            return false;
+        };
+        // Mitsuba reads a colour opacity as its luminance.
+        let alpha = opacity.eval(si.uv).luminance();
+        let bits = |v: f32| v.to_bits() as u64;
+        let key = hash2(
+            bits(ray.o.x) | bits(ray.o.y) << 32,
+            bits(ray.o.z) | bits(ray.d.x) << 32,
+        );
+        let key = hash2(key, bits(ray.d.y) | bits(ray.d.z) << 32);
+        let u = (hash2(key, bits(h.t)) >> 40) as f32 * (1.0 / (1u64 << 24) as f32);
+        u >= alpha
+    }
+
+    /// The closest hit along `ray`, every surface opaque.
+    #[inline]
+    fn intersect_opaque(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         stats.rays += 1;
         let mut best = self.accel.intersect(&self.geometry, ray, stats);
         if self.geometry.bounded_count() == self.geometry.prim_count() {
@@ -73,6 +127,11 @@ impl Scene {
     /// True when something blocks `ray` within its interval.
     #[inline]
     pub fn occluded(&self, ray: &Ray, stats: &mut RayStats) -> bool {
+        if self.has_masks {
+            // Masked surfaces block shadow rays stochastically too: the closest kept hit.
+            stats.shadow_rays += 1;
+            return self.intersect(ray, stats).is_some();
+        }
         stats.shadow_rays += 1;
         let sr = ShearedRay::unused();
         (self.geometry.bounded_count()..self.geometry.prim_count()).any(|p| {
@@ -88,9 +147,23 @@ impl Scene {
         stats.rays += rays.active.count_ones() as u64;
         self.accel
             .intersect_batch(&self.geometry, rays, hits, stats);
-        if self.geometry.bounded_count() == self.geometry.prim_count() {
-            return;
+        if self.geometry.bounded_count() != self.geometry.prim_count() {
+            self.intersect_unbounded_batch(rays, hits, stats);
         }
+        if self.has_masks {
+            for i in rays.lanes() {
+                hits[i] = self.through_masks(&rays.ray(i), hits[i], stats);
+            }
+        }
+    }
+
+    /// The unbounded primitives' part of [`Scene::intersect_batch`].
+    fn intersect_unbounded_batch(
+        &self,
+        rays: &RayBatch,
+        hits: &mut BatchHits,
+        stats: &mut RayStats,
+    ) {
         // The unbounded primitives (planes, which ignore the sheared ray), lane by lane.
         let sr = ShearedRay::unused();
         for i in rays.lanes() {
@@ -114,6 +187,11 @@ impl Scene {
     /// lane i).
     #[inline]
     pub fn occluded_batch(&self, rays: &RayBatch, stats: &mut RayStats) -> u32 {
+        if self.has_masks {
+            return rays.lanes().fold(0, |acc, i| {
+                acc | (self.occluded(&rays.ray(i), stats) as u32) << i
+            });
+        }
         stats.shadow_rays += rays.active.count_ones() as u64;
         let mut hit = 0;
         if self.geometry.bounded_count() != self.geometry.prim_count() {
@@ -302,6 +380,7 @@ impl SceneBuilder {
     pub fn build(self, accel: AccelKind) -> Scene {
         let geometry = Geometry::new(self.objects, self.meshes);
         let accel = Accel::build(accel, &geometry);
+        let has_masks = self.materials.iter().any(|m| m.opacity.is_some());
         Scene {
             camera: self
                 .camera
@@ -316,6 +395,7 @@ impl SceneBuilder {
                 .collect(),
             lights: self.lights,
             ambient: self.ambient,
+            has_masks,
         }
     }
 }

@@ -131,6 +131,10 @@ pub struct Material {
     pub model: Model,
     /// Scatters on both sides (the back side mirrors the front).
     pub two_sided: bool,
+    /// Stochastic opacity (Mitsuba's `mask`): a ray meets the surface with the probability
+    /// given by the texture's luminance at the hit and passes straight through otherwise,
+    /// shadow rays included (see [`crate::scene::Scene::intersect`]). `None`: opaque.
+    pub opacity: Option<Texture>,
 }
 
 impl Material {
@@ -139,13 +143,18 @@ impl Material {
         Self {
             model,
             two_sided: true,
+            opacity: None,
         }
     }
 
     /// A one-sided material (Mitsuba's rule).
     pub fn one_sided(model: Model) -> Self {
         let two_sided = false;
-        Self { model, two_sided }
+        Self {
+            model,
+            two_sided,
+            opacity: None,
+        }
     }
 
     /// Lambertian ρ/π, two-sided.

@@ -31,8 +31,15 @@ impl<'t> Loader<'t> {
         if let Some(&id) = self.materials.get(&e.key()) {
             return Ok(id);
         }
-        let (model, two_sided, textured) = self.bsdf(e)?;
-        let id = self.add_material(Material { model, two_sided }, textured);
+        let (model, two_sided, textured, opacity) = self.bsdf(e)?;
+        let id = self.add_material(
+            Material {
+                model,
+                two_sided,
+                opacity,
+            },
+            textured,
+        );
         self.materials.insert(e.key(), id);
         Ok(id)
     }
@@ -58,8 +65,10 @@ impl<'t> Loader<'t> {
         id
     }
 
-    /// The model of a `<bsdf>`, whether it is two-sided, and whether a texture varies.
-    fn bsdf(&mut self, e: &'t Element) -> Result<(Model, bool, bool), SceneError> {
+    /// The model of a `<bsdf>`, whether it is two-sided, whether a texture varies, and its
+    /// stochastic opacity (`mask`).
+    #[allow(clippy::type_complexity)]
+    fn bsdf(&mut self, e: &'t Element) -> Result<(Model, bool, bool, Option<Texture>), SceneError> {
         self.enter(e)?;
         let p = self.props(e)?;
         let mut textured = false;
@@ -73,10 +82,26 @@ impl<'t> Loader<'t> {
                     [_, (_, pos)] => return Err(p.error(*pos, "twosided with different front and back BSDFs is not supported")),
                     _ => return Err(p.error(e.pos, "twosided needs one nested <bsdf>")),
                 };
-                let (model, _, t) = self.bsdf(b)?;
+                let (model, _, t, opacity) = self.bsdf(b)?;
                 self.finish(&p);
                 self.leave();
-                return Ok((model, true, t));
+                return Ok((model, true, t, opacity));
+            }
+            // Mitsuba's `mask`: the nested BSDF with probability `opacity`, a straight pass
+            // otherwise (shadow rays too).
+            "mask" => {
+                let inner = p.objects("bsdf");
+                let [(b, _)] = inner.as_slice() else {
+                    return Err(p.error(e.pos, "mask needs one nested <bsdf>"));
+                };
+                let opacity = self.tex(&p, "opacity", 0.5, false, &mut textured)?;
+                let (model, two_sided, t, inner_opacity) = self.bsdf(b)?;
+                if inner_opacity.is_some() {
+                    return Err(p.error(e.pos, "a mask inside a mask is not supported"));
+                }
+                self.finish(&p);
+                self.leave();
+                return Ok((model, two_sided, t || textured, Some(opacity)));
             }
             "diffuse" => Model::Diffuse {
                 reflectance: self.tex(&p, "reflectance", 0.5, false, &mut textured)?,
@@ -108,14 +133,14 @@ impl<'t> Loader<'t> {
                 return Err(p.error(
                     e.pos,
                     format!(
-                        "unsupported BSDF '{other}' (supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, twosided)"
+                        "unsupported BSDF '{other}' (supported: diffuse, conductor, roughconductor, dielectric, roughdielectric, plastic, roughplastic, twosided, mask)"
                     ),
                 ))
             }
         };
         self.finish(&p);
         self.leave();
-        Ok((model, false, textured))
+        Ok((model, false, textured, None))
     }
 
     /// `distribution` and `alpha` (or equal `alpha_u`, `alpha_v`).

@@ -14,7 +14,7 @@
 //!   `face_normals`, a BSDF (Mitsuba's default: one-sided diffuse 0.5) and an `area` emitter
 //!   (one-sided, on the side of the normal);
 //! - BSDFs `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`,
-//!   `roughplastic` (all one-sided) and `twosided`; textures `bitmap` and `checkerboard`;
+//!   `roughplastic` (all one-sided), `twosided` and `mask`; textures `bitmap` and `checkerboard`;
 //! - emitters `point`, `spot`, `directional`, `constant`, `envmap`;
 //! - integrators `path` and its equivalents without media (`volpath`, …), `direct` (the path
 //!   tracer limited to depth 2) and `moment` (its first nested integrator), which become
@@ -37,6 +37,10 @@
 //! - colours are RGB: spectra must be single values (a flat emitted spectrum has the colour of
 //!   illuminant E, as in Mitsuba's RGB variants); conductor presets are Mitsuba's RGB values;
 //! - a scene without `<sensor>` gets a default camera (Mitsuba 3.9.1 cannot render it).
+//! - `mask`: shadow rays pass masked surfaces stochastically (Mitsuba's stop at them, so its
+//!   point and spot lights cast full shadows behind masks); a pass is not a bounce (Mitsuba
+//!   counts it towards `max_depth`); a `checkerboard` opacity follows the checkerboard's colours
+//!   (Mitsuba 3.9.1's scalar lookup swaps them);
 //! - JPEG textures are decoded by `zune-jpeg`, Mitsuba uses libjpeg: texels differ by up to
 //!   ~2 % of full scale (rounding, chroma upsampling), seen as ≲1 % differences where such a
 //!   texture dominates;

@@ -1,6 +1,6 @@
-//! The cylinder in both formats (Mitsuba's `p0`, `p1`, `radius` folded into the placement,
-//! the candela language's `cylinder(MAT, T)`), checked by rays with hand-computed hits; Mitsuba
-//! spot lights with a projected texture.
+//! Shapes and plugins of issue 15: the cylinder in both formats (Mitsuba's `p0`, `p1`, `radius`
+//! folded into the placement, the candela language's `cylinder(MAT, T)`), checked by rays with
+//! hand-computed hits; Mitsuba spot lights with a projected texture; Mitsuba's `mask` BSDF.
 
 mod support;
 
@@ -83,4 +83,29 @@ fn mitsuba_spot_lights_project_their_texture() {
     assert_eq!(spot.pattern(w(0.2, -0.2)), Rgb::new(0.0, 0.0, 1.0));
     // Behind the light: nothing.
     assert_eq!(spot.pattern(Vec3::new(0.0, 0.0, -1.0)), Rgb::BLACK);
+}
+
+#[test]
+fn mitsuba_masks_give_their_material_an_opacity() {
+    use candela_render::texture::Texture;
+    use candela_render::Rgb;
+    let l = load(&scene(
+        r#"<shape type="sphere"><bsdf type="twosided"><bsdf type="mask"><float name="opacity" value="0.25"/>
+  <bsdf type="diffuse"/></bsdf></bsdf></shape>
+<shape type="sphere"><bsdf type="mask"><bsdf type="diffuse"/></bsdf></shape>"#,
+    ));
+    assert!(l.scene.has_masks);
+    let m = &l.scene.materials;
+    let with = |a: f32| {
+        m.iter()
+            .find(|m| m.opacity == Some(Texture::Uniform(Rgb::splat(a))))
+            .map(|m| m.two_sided)
+    };
+    assert_eq!(with(0.25), Some(true));
+    // Mitsuba's default opacity is 0.5; one-sided without twosided.
+    assert_eq!(with(0.5), Some(false));
+    let e = error_of(&scene(
+        r#"<shape type="sphere"><bsdf type="mask"/></shape>"#,
+    ));
+    assert!(e.contains("mask needs one nested <bsdf>"), "{e}");
 }
