@@ -155,6 +155,16 @@ pub struct RenderArgs {
     /// With --denoise: do not keep the noisy image.
     #[arg(long)]
     pub no_keep_noisy: bool,
+    /// Serve a page on 127.0.0.1 that shows the image refining pass by pass (its address is
+    /// printed as `preview: http://127.0.0.1:PORT/`), with /image.png and /status.json.
+    #[arg(long)]
+    pub preview: bool,
+    /// The preview's port (default: a free one).
+    #[arg(long, value_name = "PORT", requires = "preview")]
+    pub preview_port: Option<u16>,
+    /// Keep the preview up after the render until Ctrl-C.
+    #[arg(long, requires = "preview")]
+    pub preview_hold: bool,
     /// How LDR outputs are tone mapped.
     #[command(flatten)]
     pub tone: ToneArgs,

@@ -66,14 +66,15 @@ pub struct Extras {
     pub exact_emission: bool,
 }
 
-/// Writes `window` of `film` to every path of `outputs`.
+/// Writes `window` of `film` to every path of `outputs`; returns the image written (denoised
+/// when asked).
 pub fn write_film(
     outputs: &[PathBuf],
     film: &Film,
     window: Window,
     extras: &Extras,
     tone: &ToneMap,
-) -> Result<()> {
+) -> Result<Image> {
     let beauty = crop(&film.rgb(0), window);
     let mut layers = Vec::new();
     let mut first = 3;
@@ -129,12 +130,13 @@ pub fn write_film(
     layers.retain(|l| extras.written.iter().any(|a| a.name() == l.name));
     if layers.is_empty() {
         // All files or none, `-` on standard output.
-        return crate::outputs::write_all(outputs, &image, tone);
+        crate::outputs::write_all(outputs, &image, tone)?;
+        return Ok(image);
     }
     for path in outputs {
         write_one(path, &image, &layers, tone)?;
     }
-    Ok(())
+    Ok(image)
 }
 
 /// `NAME.noisy.EXT` beside `path`.

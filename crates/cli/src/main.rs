@@ -23,6 +23,7 @@ mod inputs;
 mod merge;
 mod outputs;
 mod parts;
+mod preview;
 mod progress;
 mod run;
 mod session;

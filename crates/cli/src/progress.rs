@@ -27,10 +27,12 @@ impl ProgressMode {
             None | Some("bar") => Self::Bar,
             Some("json") => Self::Json,
             Some("none") => Self::None,
-            Some(other) => return Err(crate::exit::Usage(format!(
+            Some(other) => {
+                return Err(crate::exit::Usage(format!(
                 "--progress '{other}': unknown progress style (expected one of: bar, json, none)"
             ))
-            .into()),
+                .into())
+            }
         })
     }
 }
@@ -141,6 +143,19 @@ impl Progress {
     /// Removes the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+
+    /// Rays per second and seconds to go (once known), and seconds elapsed.
+    pub fn rates(&self) -> (Option<f64>, Option<f64>, f64) {
+        let done = self.done.load(Ordering::Relaxed);
+        let secs = self.start.elapsed().as_secs_f64();
+        let rate = if secs > 0.0 { done as f64 / secs } else { 0.0 };
+        let left = self.total.saturating_sub(self.resumed + done) as f64;
+        let eta = (rate > 0.0).then(|| left / rate);
+        let traced = self.samples_traced.load(Ordering::Relaxed);
+        let rays =
+            (traced > 0).then(|| self.rays.load(Ordering::Relaxed) as f64 / traced as f64 * rate);
+        (rays, eta, secs)
     }
 
     fn line(&self, event: &str, extra: &str) {

@@ -4,8 +4,9 @@ use crate::args::{RenderArgs, SceneArgs};
 use crate::exit::Usage;
 use crate::frames;
 use crate::identity;
-use crate::images::{parse_aovs, tone_map, write_film, Extras, RENDER_GAMMA};
+use crate::images::{crop, parse_aovs, tone_map, write_film, Extras, RENDER_GAMMA};
 use crate::parts;
+use crate::preview::{Preview, Status as PreviewStatus};
 use crate::progress::{json_string, Progress, ProgressMode};
 use crate::session::{self, run_passes, Ending, Interrupted, Job, Plan};
 use anyhow::{bail, Context, Result};
@@ -64,6 +65,15 @@ fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
         }
     }
     session::catch_signals();
+    let preview = if args.preview {
+        Some(Preview::start(args.preview_port)?)
+    } else {
+        None
+    };
+    let show = Show {
+        mode,
+        preview: preview.as_ref(),
+    };
     for frame in frames {
         let mut opts = base_opts.clone();
         let paths = FramePaths {
@@ -89,11 +99,21 @@ fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
             &opts.defines,
             &paths,
             frame,
-            mode,
+            show,
             load_seconds,
         )?;
     }
+    if let (Some(p), true) = (&preview, args.preview_hold) {
+        p.hold();
+    }
     Ok(())
+}
+
+/// How a render shows its progress: on stderr, and on the preview page if there is one.
+#[derive(Clone, Copy)]
+struct Show<'a> {
+    mode: ProgressMode,
+    preview: Option<&'a Preview>,
 }
 
 /// The files one frame reads and writes (`%d` already replaced).
@@ -239,7 +259,7 @@ fn render_frame(
     defines: &[(String, String)],
     paths: &FramePaths,
     frame: Option<u32>,
-    mode: ProgressMode,
+    show: Show<'_>,
     load_seconds: f64,
 ) -> Result<()> {
     for w in &loaded.warnings {
@@ -376,7 +396,7 @@ fn render_frame(
 
     let per_sample = window.pixels() as u64;
     let progress = Progress::new(
-        mode,
+        show.mode,
         per_sample * (target.1 - target.0) as u64,
         per_sample * (first - target.0) as u64,
         frame,
@@ -410,6 +430,31 @@ fn render_frame(
     let plan = Plan {
         checkpoint_every: checkpoint.as_ref().map(|_| args.checkpoint_every),
         time_limit: args.time_limit,
+        progressive: show.preview.is_some(),
+    };
+    let spp_total = target.1 - target.0;
+    let status = |state: &'static str, done: u32| {
+        let (rays_per_s, eta_s, elapsed_s) = progress.rates();
+        PreviewStatus {
+            state,
+            spp_done: done - target.0,
+            spp_total,
+            rays_per_s,
+            eta_s: if state == "rendering" {
+                eta_s
+            } else {
+                Some(0.0)
+            },
+            elapsed_s,
+        }
+    };
+    if let Some(p) = show.preview {
+        p.set_status(status("rendering", first));
+    }
+    let mut after_pass = |film: &Film, done: u32| {
+        if let Some(p) = show.preview {
+            p.publish(crop(&film.rgb(0), window), status("rendering", done));
+        }
     };
     let job = Job {
         scene: &loaded.scene,
@@ -425,6 +470,7 @@ fn render_frame(
             plan,
             &progress,
             &mut save_checkpoint,
+            &mut after_pass,
         )
     })?;
     let seconds = start.elapsed().as_secs_f64();
@@ -464,6 +510,9 @@ fn render_frame(
 
     if let Some(path) = &paths.partial {
         save_partial(path, &film, done)?;
+        if let Some(p) = show.preview {
+            p.publish(crop(&film.rgb(0), window), status("done", done));
+        }
     } else {
         let extras = Extras {
             aovs: settings.aovs,
@@ -473,7 +522,11 @@ fn render_frame(
             keep_noisy: !args.no_keep_noisy,
         };
         let tone = tone_map(&args.tone, RENDER_GAMMA);
-        write_film(&paths.outputs, &film, window, &extras, &tone)?;
+        let image = write_film(&paths.outputs, &film, window, &extras, &tone)?;
+        if let Some(p) = show.preview {
+            let state = if args.denoise { "denoised" } else { "done" };
+            p.publish(image, status(state, done));
+        }
     }
     progress.event("done", "");
     if args.stats {

@@ -50,6 +50,8 @@ pub struct Plan {
     pub checkpoint_every: Option<f64>,
     /// Stop starting passes once this many seconds have passed, if any.
     pub time_limit: Option<f64>,
+    /// Show the image after every pass (the preview): passes of a few seconds at most.
+    pub progressive: bool,
 }
 
 /// How the loop ended.
@@ -68,6 +70,9 @@ pub enum Ending {
 const LONGEST_PASS: f64 = 30.0;
 /// The most samples a pass takes.
 const MOST_SAMPLES: u32 = 64;
+/// The length of a preview's second pass (the first has one sample); each next one is twice
+/// as long.
+const FIRST_PREVIEW_PASS: f64 = 0.5;
 
 /// What a frame is rendered from.
 #[derive(Clone, Copy)]
@@ -90,14 +95,16 @@ pub fn run_passes(
     plan: Plan,
     progress: &Progress,
     save: &mut dyn FnMut(&Film, u32) -> Result<()>,
+    after_pass: &mut dyn FnMut(&Film, u32),
 ) -> Result<(Ending, u32, RayStats)> {
     let start = Instant::now();
     let mut last_save = (Instant::now(), first);
     let mut stats = RayStats::default();
     let mut done = first;
-    let stepwise = plan.checkpoint_every.is_some() || plan.time_limit.is_some();
+    let stepwise = plan.checkpoint_every.is_some() || plan.time_limit.is_some() || plan.progressive;
     // Seconds per sample of every pixel, from the last pass.
     let mut per_sample: Option<f64> = None;
+    let mut passes: i32 = 0;
     while done < last {
         if INTERRUPTED.load(Ordering::SeqCst) {
             return Ok((Ending::Interrupted, done, stats));
@@ -106,7 +113,13 @@ pub fn run_passes(
         if stepwise {
             // A soft length (passes of whole batches of 16 samples trace fastest, so a pass
             // takes 16 when they fit in a hard length, but no more than the soft one allows).
-            let mut soft = LONGEST_PASS;
+            // A preview's passes double in length (a first image at once, then ever fewer
+            // pass boundaries), up to the longest pass.
+            let mut soft = if plan.progressive {
+                (FIRST_PREVIEW_PASS * 2f64.powi(passes.min(30))).min(LONGEST_PASS)
+            } else {
+                LONGEST_PASS
+            };
             let mut hard = f64::INFINITY;
             if let Some(every) = plan.checkpoint_every {
                 soft = soft.min(every / 2.0);
@@ -122,6 +135,10 @@ pub fn run_passes(
                 hard = hard.min(left);
             }
             n = match per_sample {
+                // A first pass that measures the time per sample: one sample when a time
+                // limit or a checkpoint interval must be kept, else one batch of 16 (the
+                // preview's first image; shorter passes trace less efficiently).
+                None if plan.time_limit.is_none() && plan.checkpoint_every.is_none() => 16,
                 None => 1,
                 Some(t) => {
                     let fit =
@@ -131,7 +148,9 @@ pub fn run_passes(
                         k = fit(hard).min(16);
                     }
                     if k >= 16 {
-                        k = k / 16 * 16;
+                        // End on a multiple of 16: whole batches, and the sampler's tables
+                        // (chunks of 64 samples) filled once.
+                        k = (done + k) / 16 * 16 - done;
                     }
                     k.max(1)
                 }
@@ -162,8 +181,10 @@ pub fn run_passes(
         };
         per_sample = Some(t0.elapsed().as_secs_f64() / n as f64);
         done += n;
+        passes += 1;
         stats += s;
         progress.pass_done(&s);
+        after_pass(film, done);
     }
     Ok((Ending::Complete, done, stats))
 }

@@ -210,6 +210,7 @@ fn render_pixel(
         (y * settings.width + x) as u64,
         settings.spp,
     );
+    sampler.draw_until(last);
     let mut sum = [0i128; 3];
     // The samples go to the integrator in groups of `BATCH`, traced side by side; each keeps
     // its own place in the pixel's sample sequence.
@@ -286,6 +287,7 @@ fn aov_pixel(
         (y * settings.width + x) as u64,
         settings.spp,
     );
+    sampler.draw_until(last);
     let n = settings.aovs.channels();
     let mut acc = [0i128; 16];
     let mut vals = [0f32; 16];

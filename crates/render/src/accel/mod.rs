@@ -69,6 +69,10 @@ pub enum AccelKind {
     Embree,
 }
 
+/// Batches with at most this many active rays are traced ray by ray (a short pass, or the
+/// last paths of a batch still alive).
+pub const SCALAR_LANES: u32 = 3;
+
 impl AccelKind {
     /// The command-line names, in order.
     #[cfg(not(feature = "embree"))]
@@ -224,7 +228,8 @@ impl Accel {
     }
 
     /// The closest hit of every active lane of `rays` (the same hits as [`Accel::intersect`]
-    /// ray by ray).
+    /// ray by ray). Batches of at most [`SCALAR_LANES`] rays go ray by ray: the sixteen-lane
+    /// kernels cost nearly the same for one ray as for sixteen.
     pub fn intersect_batch(
         &self,
         geometry: &Geometry,
@@ -233,7 +238,9 @@ impl Accel {
         stats: &mut RayStats,
     ) {
         if let Accel::Bvh(b) = self {
-            return b.intersect_batch(geometry, rays, hits, stats);
+            if rays.active.count_ones() > SCALAR_LANES {
+                return b.intersect_batch(geometry, rays, hits, stats);
+            }
         }
         *hits = [None; BATCH];
         for i in rays.lanes() {
@@ -249,7 +256,9 @@ impl Accel {
         stats: &mut RayStats,
     ) -> u32 {
         if let Accel::Bvh(b) = self {
-            return b.occluded_batch(geometry, rays, stats);
+            if rays.active.count_ones() > SCALAR_LANES {
+                return b.occluded_batch(geometry, rays, stats);
+            }
         }
         let mut hit = 0;
         for i in rays.lanes() {

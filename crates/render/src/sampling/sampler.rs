@@ -60,6 +60,8 @@ pub struct Sampler {
     /// The pixel's seed (independent samplers seed each sample's stream with it).
     pixel_seed: u64,
     spp: u32,
+    /// One past the last sample index the current pass draws (tables stop there).
+    end: u32,
     /// How the numbers are made, with the pixel's pattern seed.
     mode: Mode,
     /// The sample being drawn, and its index with the bits reversed.
@@ -145,6 +147,7 @@ impl Sampler {
         self.rng = Pcg32::new(h, pixel);
         self.pixel_seed = h;
         self.spp = spp.max(1);
+        self.end = self.spp;
         self.mode = match kind {
             SamplerKind::Sobol => Mode::Sobol(pattern),
             SamplerKind::Stratified => Mode::Strata(pattern),
@@ -158,6 +161,12 @@ impl Sampler {
         self.batched = 0;
     }
 
+    /// Says that this pixel's samples will be drawn up to index `end` (exclusive) only, so
+    /// that the tables of a short pass are not filled beyond it (the values do not change).
+    pub fn draw_until(&mut self, end: u32) {
+        self.end = end.clamp(1, self.spp);
+    }
+
     /// A free-standing independent sampler (tests, preprocessing) seeded by `seed` on stream
     /// `stream`.
     pub fn new(seed: u64, stream: u64) -> Self {
@@ -165,6 +174,7 @@ impl Sampler {
             rng: Pcg32::new(hash2(seed, stream), stream),
             pixel_seed: hash2(seed, stream),
             spp: 1,
+            end: 1,
             mode: Mode::Independent,
             index: 0,
             rindex: 0,
@@ -274,7 +284,7 @@ impl Sampler {
     #[inline(never)]
     fn fill(&mut self, seed: u32, d: usize, j: usize) {
         let s = self.dim_seeds(seed, d as u32);
-        let n = (self.spp.saturating_sub(self.chunk) as usize).clamp(j + 1, CHUNK);
+        let n = (self.end.saturating_sub(self.chunk) as usize).clamp(j + 1, CHUNK);
         self.batched |= 1 << d;
         self.batch_from[d] = j as u8;
         crate::simd::run(Batch {
