@@ -102,6 +102,8 @@ pub fn write_film(
         let clean = match layer("emission").filter(|_| extras.exact_emission) {
             None => denoise_image(&beauty, aux)?,
             Some(e) => {
+                // Added back antialiased at the edges of lights when it was traced so.
+                let back = layer("emission_aa").unwrap_or(e);
                 // Lights seen directly stay exact: the emission of the first hit (the same
                 // rays as the beauty's) is left out of the denoising and added back.
                 let mut rest = beauty.clone();
@@ -109,7 +111,7 @@ pub fn write_film(
                     *p = Rgb::new(p.r - v[0], p.g - v[1], p.b - v[2]);
                 }
                 let mut clean = denoise_image(&rest, aux)?;
-                for (p, v) in clean.pixels_mut().iter_mut().zip(e.chunks(3)) {
+                for (p, v) in clean.pixels_mut().iter_mut().zip(back.chunks(3)) {
                     *p = Rgb::new(p.r + v[0], p.g + v[1], p.b + v[2]);
                 }
                 clean

@@ -141,7 +141,11 @@ fn sampler_kind(args: &RenderArgs) -> Result<SamplerKind> {
 fn aov_set(args: &RenderArgs) -> Result<AovSet> {
     let mut set = parse_aovs(args.aov.as_deref())?;
     if args.denoise {
-        set = set.with(Aov::Albedo).with(Aov::Normal).with(Aov::Emission);
+        set = set
+            .with(Aov::Albedo)
+            .with(Aov::Normal)
+            .with(Aov::Emission)
+            .with(Aov::EmissionAa);
     }
     Ok(set)
 }

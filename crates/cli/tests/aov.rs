@@ -184,3 +184,58 @@ fn denoising_with_oidn_lowers_the_error() {
     let clean = candela_imageio::read_image(&out).unwrap();
     assert!(rmse(&clean) < 0.7 * e_noisy);
 }
+
+/// The antialiased emission estimates the same thing as the emission (their means agree at
+/// many samples) and is far closer to it at few samples on the edges of the light.
+#[test]
+fn antialiased_emission_is_unbiased_and_sharper_on_light_edges() {
+    let dir = scratch("aov-aa");
+    let scene = support::repo().join("bench/scenes/cornell.xml");
+    let render = |spp: &str, out: &str| {
+        let p = dir.join(out);
+        let o = candela(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-q",
+            "--integrator",
+            "flat",
+            "--width",
+            "48",
+            "--height",
+            "48",
+            "--spp",
+            spp,
+            "--aov",
+            "emission,emission_aa",
+            "-o",
+            p.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let read = |v: &str| {
+            candela_imageio::read_image(&dir.join(out.replace(".pfm", &format!(".{v}.pfm"))))
+                .unwrap()
+        };
+        (read("emission"), read("emission_aa"))
+    };
+    let (truth, truth_aa) = render("1024", "t.pfm");
+    let (e4, aa4) = render("4", "f.pfm");
+    let err = |a: &candela_render::Image| {
+        a.pixels()
+            .iter()
+            .zip(truth.pixels())
+            .map(|(p, q)| ((p.r - q.r) as f64).powi(2))
+            .sum::<f64>()
+    };
+    let light: f32 = truth.pixels().iter().map(|p| p.r).sum();
+    assert!(light > 0.0, "the light is in view");
+    // Same expectation: at 1024 spp both agree to within 1 % of the light's total.
+    let diff: f32 = truth
+        .pixels()
+        .iter()
+        .zip(truth_aa.pixels())
+        .map(|(p, q)| (p.r - q.r).abs())
+        .sum();
+    assert!(diff < 0.01 * light, "{diff} vs {light}");
+    // At 4 spp the antialiased emission has a small fraction of the squared error.
+    assert!(err(&aa4) < 0.2 * err(&e4), "{} vs {}", err(&aa4), err(&e4));
+}

@@ -37,11 +37,71 @@ pub enum Aov {
     Shape,
     /// Radiance emitted by the first hit towards the camera (`emission.R/G/B`).
     Emission,
+    /// The same, antialiased: at the edges of lights (where a pixel's footprint sees both a
+    /// light and something else) each sample traces [`EDGE_RAYS`] stratified camera rays for it
+    /// (`emission_aa.R/G/B`). The denoiser adds this back instead of `emission`.
+    EmissionAa,
+}
+
+/// Camera rays per sample for [`Aov::EmissionAa`] at the edges of lights.
+pub const EDGE_RAYS: u32 = 16;
+
+/// True when the footprint of a pixel, widened by 0.4 pixel on every side (so that a light
+/// covering a sliver of the pixel is seen in the neighbour), sees an emitter in some places and
+/// not in others: probes on a 6 × 6 grid of `extent` pixels around the pixel's centre
+/// (`ray_at` gives the camera ray through a point of the image plane, in pixels from the
+/// pixel's corner).
+pub fn near_light_edge(
+    scene: &Scene,
+    extent: f32,
+    ray_at: &mut dyn FnMut([f32; 2]) -> Ray,
+    stats: &mut RayStats,
+) -> bool {
+    let (mut lit, mut dark) = (false, false);
+    let half = 0.5 * extent + 0.4;
+    for k in 0..36 {
+        let at = |i: usize| 0.5 - half + 2.0 * half * i as f32 / 5.0;
+        let ray = ray_at([at(k % 6), at(k / 6)]);
+        let emits = scene
+            .interact(&ray, stats)
+            .is_some_and(|si| scene.emitted(&si).max_component() > 0.0);
+        lit |= emits;
+        dark |= !emits;
+    }
+    lit && dark
+}
+
+/// The filter-weighted emission seen by [`EDGE_RAYS`] camera rays at stratified points of the
+/// filter's square, jittered by `key` (a hash of the pixel and the sample), averaged.
+pub fn emission_aa(
+    scene: &Scene,
+    ray_at: &mut dyn FnMut([f32; 2]) -> (Ray, f32),
+    key: u64,
+    stats: &mut RayStats,
+) -> [f32; 3] {
+    let side = (EDGE_RAYS as f32).sqrt() as u32;
+    let mut sum = [0.0f32; 3];
+    for k in 0..EDGE_RAYS {
+        let h = crate::sampling::pcg::hash2(key, k as u64);
+        let jitter = |bits: u64| (bits & 0xff_ffff) as f32 / (1 << 24) as f32;
+        let u = [
+            ((k % side) as f32 + jitter(h)) / side as f32,
+            ((k / side) as f32 + jitter(h >> 32)) / side as f32,
+        ];
+        let (ray, w) = ray_at(u);
+        if let Some(si) = scene.interact(&ray, stats) {
+            let e = scene.emitted(&si) * w;
+            sum[0] += e.r;
+            sum[1] += e.g;
+            sum[2] += e.b;
+        }
+    }
+    sum.map(|v| v / EDGE_RAYS as f32)
 }
 
 impl Aov {
     /// Every output variable, in output order.
-    pub const ALL: [Aov; 7] = [
+    pub const ALL: [Aov; 8] = [
         Aov::Albedo,
         Aov::Normal,
         Aov::Depth,
@@ -49,6 +109,7 @@ impl Aov {
         Aov::Uv,
         Aov::Shape,
         Aov::Emission,
+        Aov::EmissionAa,
     ];
 
     /// The name of the variable (`--aov` and the layer name).
@@ -61,6 +122,7 @@ impl Aov {
             Aov::Uv => "uv",
             Aov::Shape => "shape",
             Aov::Emission => "emission",
+            Aov::EmissionAa => "emission_aa",
         }
     }
 
@@ -72,7 +134,7 @@ impl Aov {
     /// The channel names within the layer (OpenEXR convention: `layer.channel`).
     pub fn channels(self) -> &'static [&'static str] {
         match self {
-            Aov::Albedo | Aov::Emission => &["R", "G", "B"],
+            Aov::Albedo | Aov::Emission | Aov::EmissionAa => &["R", "G", "B"],
             Aov::Normal | Aov::Position => &["X", "Y", "Z"],
             Aov::Depth => &["Z"],
             Aov::Uv => &["U", "V"],
@@ -168,7 +230,9 @@ pub fn aov_sample(scene: &Scene, ray: &Ray, set: AovSet, out: &mut [f32], stats:
             Aov::Position => &[first.p.x, first.p.y, first.p.z],
             Aov::Uv => &[first.uv.x, first.uv.y],
             Aov::Shape => &[scene.geometry.shape_index(first.prim) as f32],
-            Aov::Emission => &{
+            // The antialiased emission starts as the sample's own (the caller refines it at
+            // the edges of lights).
+            Aov::Emission | Aov::EmissionAa => &{
                 let e = scene.emitted(&first);
                 [e.r, e.g, e.b]
             },

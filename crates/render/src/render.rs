@@ -12,7 +12,7 @@
 //! Samples whose radiance is NaN or infinite are rejected (counted in
 //! [`RayStats::rejected_samples`]): they count as samples but contribute zero.
 
-use crate::aov::{aov_sample, AovSet};
+use crate::aov::{aov_sample, emission_aa as emission_aa_of, near_light_edge, Aov, AovSet};
 use crate::color::Rgb;
 use crate::film::{to_fixed, Film, Window};
 use crate::filter::{Filter, FilterSampler};
@@ -269,6 +269,35 @@ fn camera_ray(
     (ray, weight)
 }
 
+/// The camera ray through the point of the filter's square `u` of pixel (x, y), with its
+/// filter weight (lens cameras: a lens point hashed from `key` and `u`).
+fn camera_ray_at(
+    scene: &Scene,
+    (w, h): (f32, f32),
+    (x, y): (usize, usize),
+    u: [f32; 2],
+    key: u64,
+    filter: &FilterSampler,
+) -> (Ray, f32) {
+    let ([sx, sy], weight) = filter.sample(u);
+    let (pu, pv) = ((x as f32 + sx) / w, 1.0 - (y as f32 + sy) / h);
+    let ray = match scene.camera.lens {
+        None => scene.camera.ray(pu, pv),
+        Some(_) => {
+            let hsh = crate::sampling::pcg::hash2(
+                key,
+                u[0].to_bits() as u64 | (u[1].to_bits() as u64) << 32,
+            );
+            let lens = [
+                (hsh & 0xff_ffff) as f32 / (1 << 24) as f32,
+                ((hsh >> 32) & 0xff_ffff) as f32 / (1 << 24) as f32,
+            ];
+            scene.camera.ray_through_lens(pu, pv, lens)
+        }
+    };
+    (ray, weight)
+}
+
 /// Appends to `sums` the fixed-point sums of the output variables of samples `first..last` of
 /// pixel (x, y), seen along the same camera rays as the radiance.
 fn aov_pixel(
@@ -289,12 +318,51 @@ fn aov_pixel(
     );
     sampler.draw_until(last);
     let n = settings.aovs.channels();
-    let mut acc = [0i128; 16];
-    let mut vals = [0f32; 16];
+    let mut acc = [0i128; 32];
+    let mut vals = [0f32; 32];
+    // Where the emission channels are (they carry the filter weight, as the radiance does, so
+    // that the denoiser can take them out of it exactly).
+    let offset = |aov: Aov| {
+        settings.aovs.contains(aov).then(|| {
+            settings
+                .aovs
+                .iter()
+                .take_while(|&a| a != aov)
+                .map(|a| a.channels().len())
+                .sum::<usize>()
+        })
+    };
+    let (emission, emission_aa) = (offset(Aov::Emission), offset(Aov::EmissionAa));
+    let pixel_key = crate::sampling::pcg::hash2(settings.seed, (y * settings.width + x) as u64);
+    let edge = emission_aa.is_some()
+        && near_light_edge(
+            scene,
+            (2.0 * filter.filter().radius()).max(1.0),
+            &mut |[sx, sy]| {
+                let (pu, pv) = ((x as f32 + sx) / size.0, 1.0 - (y as f32 + sy) / size.1);
+                scene.camera.ray(pu, pv)
+            },
+            stats,
+        );
     for i in first..last {
-        // The variables are plain means over the same rays (filter weights left out).
-        let (ray, _) = camera_ray(scene, size, (x, y), i, (&mut *sampler, filter));
+        // The other variables are plain means over the same rays.
+        let (ray, w) = camera_ray(scene, size, (x, y), i, (&mut *sampler, filter));
         aov_sample(scene, &ray, settings.aovs, &mut vals[..n], stats);
+        for at in [emission, emission_aa].into_iter().flatten() {
+            for v in &mut vals[at..at + 3] {
+                *v *= w;
+            }
+        }
+        if let (Some(at), true) = (emission_aa, edge) {
+            let key = crate::sampling::pcg::hash2(pixel_key, i as u64);
+            let e = emission_aa_of(
+                scene,
+                &mut |u| camera_ray_at(scene, size, (x, y), u, key, filter),
+                key,
+                stats,
+            );
+            vals[at..at + 3].copy_from_slice(&e);
+        }
         for (a, &v) in acc.iter_mut().zip(&vals[..n]) {
             if v.is_finite() {
                 *a += to_fixed(v);
