@@ -70,6 +70,8 @@ pub enum Ending {
 const LONGEST_PASS: f64 = 30.0;
 /// The most samples a pass takes.
 const MOST_SAMPLES: u32 = 64;
+/// The most samples a pass of a preview (without checkpoints or time limit) takes.
+const MOST_PREVIEW_SAMPLES: u32 = 1024;
 /// The length of a preview's second pass (the first has one sample); each next one is twice
 /// as long.
 const FIRST_PREVIEW_PASS: f64 = 0.5;
@@ -141,8 +143,14 @@ pub fn run_passes(
                 None if plan.time_limit.is_none() && plan.checkpoint_every.is_none() => 16,
                 None => 1,
                 Some(t) => {
-                    let fit =
-                        |secs: f64| (secs / t.max(1e-9)).floor().min(MOST_SAMPLES as f64) as u32;
+                    // Checkpoints and time limits keep passes short; a preview alone lets
+                    // them grow (fewer boundaries, each costing a little).
+                    let most = if plan.checkpoint_every.is_none() && plan.time_limit.is_none() {
+                        MOST_PREVIEW_SAMPLES
+                    } else {
+                        MOST_SAMPLES
+                    };
+                    let fit = |secs: f64| (secs / t.max(1e-9)).floor().min(most as f64) as u32;
                     let mut k = fit(soft);
                     if k < 16 {
                         k = fit(hard).min(16);
