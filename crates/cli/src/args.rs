@@ -126,7 +126,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,
     /// Seconds between checkpoints.
-    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = positive_f64)]
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, allow_negative_numbers = true, value_parser = positive_f64)]
     pub checkpoint_every: f64,
     /// Continue the render saved in this checkpoint (and keep checkpointing to it unless
     /// --checkpoint names another file).
@@ -134,7 +134,7 @@ pub struct RenderArgs {
     pub resume: Option<PathBuf>,
     /// Render whole sample passes until this many seconds have passed, then write the image of
     /// the samples done and a checkpoint to resume from.
-    #[arg(long, value_name = "SECONDS", value_parser = positive_f64)]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = positive_f64)]
     pub time_limit: Option<f64>,
     /// Render frames A ≤ f < B of an animation: the float --frame-var is set to f (as by -d)
     /// and `%d` / `%04d` in output, partial and checkpoint names becomes the frame number.

@@ -6,6 +6,7 @@
 //! samples are refused unless `--allow-incomplete`, and the message lists what is missing.
 
 use crate::args::MergeArgs;
+use crate::exit::Usage;
 use crate::images::{parse_aovs, tone_map, write_film, Extras, RENDER_GAMMA};
 use crate::parts::{read_part, same_frame};
 use anyhow::{bail, Context, Result};
@@ -31,16 +32,21 @@ pub fn run(args: MergeArgs) -> Result<()> {
         {
             partials.push(o.clone());
         } else {
-            bail!(
+            return Err(Usage(format!(
                 "--output '{}': unknown format (an image .png, .pfm, .exr, .hdr, or a partial file .{})",
                 o.display(),
                 PARTIAL_EXTENSIONS.join(", .")
-            );
+            ))
+            .into());
         }
     }
     for o in &args.outputs {
         if args.parts.iter().any(|p| same_file(p, o)) {
-            bail!("--output '{}' is one of the parts to merge", o.display());
+            return Err(Usage(format!(
+                "--output '{}' is one of the parts to merge",
+                o.display()
+            ))
+            .into());
         }
     }
     let parts: Vec<(PathBuf, Partial)> = args
