@@ -4,11 +4,12 @@
 
 use crate::args::DenoiseArgs;
 use crate::args::ToneArgs;
+pub use crate::inputs::parse_aovs;
 use anyhow::{bail, Context, Result};
 use candela_denoise::Auxiliaries;
 use candela_imageio::exr::{read_exr_channels, write_exr_layers, AovLayer};
 use candela_imageio::{write_atomically, Encoding, Format, ToneMap};
-use candela_render::aov::{Aov, AovSet};
+use candela_render::aov::AovSet;
 use candela_render::film::{Film, Window};
 use candela_render::{Image, Rgb};
 use std::path::{Path, PathBuf};
@@ -28,27 +29,6 @@ pub fn tone_map(t: &ToneArgs, default_gamma: f32) -> ToneMap {
             Encoding::Gamma(t.gamma.unwrap_or(default_gamma))
         },
     }
-}
-
-/// Parses `--aov LIST`.
-pub fn parse_aovs(list: Option<&str>) -> Result<AovSet> {
-    let mut set = AovSet::NONE;
-    for name in list
-        .unwrap_or("")
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-    {
-        let aov = Aov::from_name(name).ok_or_else(|| {
-            let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
-            crate::exit::Usage(format!(
-                "--aov '{name}': unknown output variable (expected some of: {})",
-                names.join(", ")
-            ))
-        })?;
-        set = set.with(aov);
-    }
-    Ok(set)
 }
 
 /// What to write besides the beauty.

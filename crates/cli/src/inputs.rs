@@ -7,14 +7,52 @@ use crate::args::{Command, RenderArgs};
 use crate::exit::Usage;
 use candela_imageio::Limits;
 use candela_render::accel::AccelKind;
+use candela_render::aov::{Aov, AovSet};
 use candela_render::integrator::{branching_depth, whitted_depth, IntegratorKind};
 use candela_render::radiosity::{FormFactorMethod, SolverKind};
 use candela_render::sampling::SamplerKind;
 use std::path::{Path, PathBuf};
 
-/// Bytes a rendered pixel takes (the film's fixed-point sums and counts, the image, the encoded
-/// outputs), for the estimate made before rendering.
-pub const RENDER_BYTES_PER_PIXEL: u64 = 96;
+/// Bytes a rendered pixel takes per film channel (3 for the radiance, more for output
+/// variables): the film's 128-bit sum, a copy of it for a checkpoint, and the encoded partial
+/// file, for the estimate made before rendering.
+pub const RENDER_BYTES_PER_CHANNEL: u64 = 40;
+/// Bytes a rendered pixel takes besides its channels: the sample count, the image, its crop and
+/// the encoded outputs.
+pub const RENDER_BYTES_PER_PIXEL: u64 = 48;
+
+/// Parses `--aov LIST`.
+pub fn parse_aovs(list: Option<&str>) -> Result<AovSet, Usage> {
+    let mut set = AovSet::NONE;
+    for name in list
+        .unwrap_or("")
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+    {
+        let aov = Aov::from_name(name).ok_or_else(|| {
+            let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
+            Usage(format!(
+                "--aov '{name}': unknown output variable (expected some of: {})",
+                names.join(", ")
+            ))
+        })?;
+        set = set.with(aov);
+    }
+    Ok(set)
+}
+
+/// Film channels of a render with these options: the radiance and the output variables
+/// (`--aov`, and those `--denoise` adds).
+fn film_channels(a: &RenderArgs) -> u64 {
+    let mut aovs = parse_aovs(a.aov.as_deref()).unwrap_or_default();
+    if a.denoise {
+        for v in [Aov::Albedo, Aov::Normal, Aov::Emission, Aov::EmissionAa] {
+            aovs = aovs.with(v);
+        }
+    }
+    3 + aovs.channels() as u64
+}
 
 /// The memory budget: `--max-memory`, or 2 GiB, or half the address-space limit when that is
 /// lower (`ulimit -v`).
@@ -155,7 +193,12 @@ fn render_args(a: &RenderArgs, xml: bool) -> Result<(), Usage> {
     if !xml || (a.width.is_some() && a.height.is_some()) {
         let w = a.width.unwrap_or(640);
         let h = a.height.unwrap_or(480);
-        render_memory(w as usize, h as usize, max_memory(a.max_memory))?;
+        render_memory(
+            w as usize,
+            h as usize,
+            film_channels(a),
+            max_memory(a.max_memory),
+        )?;
     }
     if let Some(cache) = &a.radiosity_cache {
         candela_imageio::check_target(cache)
@@ -164,14 +207,21 @@ fn render_args(a: &RenderArgs, xml: bool) -> Result<(), Usage> {
     Ok(())
 }
 
-/// Fails unless a `width`×`height` render fits in the memory budget `max_memory`.
-pub fn render_memory(width: usize, height: usize, max_memory: u64) -> Result<(), Usage> {
+/// Fails unless a `width`×`height` render with `channels` film channels fits in the memory
+/// budget `max_memory`.
+pub fn render_memory(
+    width: usize,
+    height: usize,
+    channels: u64,
+    max_memory: u64,
+) -> Result<(), Usage> {
+    let per_pixel = RENDER_BYTES_PER_PIXEL + RENDER_BYTES_PER_CHANNEL * channels;
     let need = (width as u64)
         .saturating_mul(height as u64)
-        .saturating_mul(RENDER_BYTES_PER_PIXEL);
+        .saturating_mul(per_pixel);
     if need > max_memory {
         return Err(Usage(format!(
-            "--width/--height: a {width}×{height} image needs about {} MB ({RENDER_BYTES_PER_PIXEL} bytes per pixel), more than --max-memory {} MB; raise --max-memory or render a smaller image",
+            "--width/--height: a {width}×{height} image needs about {} MB ({per_pixel} bytes per pixel with {channels} film channels), more than --max-memory {} MB; raise --max-memory or render a smaller image",
             need.div_ceil(1 << 20),
             max_memory >> 20
         )));
@@ -181,7 +231,13 @@ pub fn render_memory(width: usize, height: usize, max_memory: u64) -> Result<(),
 
 /// Checks what the loaded scene decided (an XML film's size) against the memory budget.
 pub fn check_render(width: usize, height: usize, args: &RenderArgs) -> anyhow::Result<()> {
-    render_memory(width, height, max_memory(args.max_memory)).map_err(anyhow::Error::new)
+    render_memory(
+        width,
+        height,
+        film_channels(args),
+        max_memory(args.max_memory),
+    )
+    .map_err(anyhow::Error::new)
 }
 
 /// Reads the radiosity cache: a regular file of at most a quarter of the memory budget.
@@ -199,8 +255,8 @@ mod tests {
 
     #[test]
     fn huge_images_are_refused_naming_the_option() {
-        let e = render_memory(32768, 32768, 2 << 30).unwrap_err();
+        let e = render_memory(32768, 32768, 3, 2 << 30).unwrap_err();
         assert!(e.0.contains("--max-memory"), "{e}");
-        assert!(render_memory(640, 480, 2 << 30).is_ok());
+        assert!(render_memory(640, 480, 3, 2 << 30).is_ok());
     }
 }

@@ -229,8 +229,7 @@ fn radiosity_options(args: &RenderArgs, kind: IntegratorKind) -> Result<Radiosit
     Ok(o)
 }
 
-/// Prints the radiosity warnings (and the report with `--stats`) and saves a computed
-/// solution to `--radiosity-cache`.
+/// Prints the radiosity warnings (and the report with `--stats`).
 fn radiosity_outcome(outcome: &RadiosityOutcome, args: &RenderArgs) -> Result<()> {
     for w in &outcome.report.warnings {
         eprintln!("candela: warning: {w}");
@@ -250,9 +249,23 @@ fn radiosity_outcome(outcome: &RadiosityOutcome, args: &RenderArgs) -> Result<()
     if args.stats {
         eprintln!("{}", outcome.report);
     }
-    if let (Some(path), Some(bytes)) = (&args.radiosity_cache, &outcome.cache_bytes) {
-        write_atomically(path, bytes)
-            .with_context(|| format!("--radiosity-cache '{}': cannot write it", path.display()))?;
+    Ok(())
+}
+
+/// Saves a computed radiosity solution to `--radiosity-cache`: after the images (a failed
+/// image write leaves no cache behind), or when the render is interrupted (the solution is
+/// finished work).
+fn save_radiosity_cache(outcome: Option<&RadiosityOutcome>, args: &RenderArgs) -> Result<()> {
+    if let (Some(path), Some(bytes)) = (
+        &args.radiosity_cache,
+        outcome.and_then(|o| o.cache_bytes.as_ref()),
+    ) {
+        write_atomically(path, bytes).map_err(|e| {
+            crate::exit::Output(format!(
+                "--radiosity-cache '{}': cannot write it ({e})",
+                path.display()
+            ))
+        })?;
     }
     Ok(())
 }
@@ -392,7 +405,7 @@ fn render_frame(
     if let Some(outcome) = &built.radiosity {
         radiosity_outcome(outcome, args)?;
     }
-    let integrator = built.integrator;
+    let integrator = &built.integrator;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0) as usize)
         .build()
@@ -493,6 +506,7 @@ fn render_frame(
                 }
                 None => format!("{held} done, not saved (--checkpoint FILE keeps them)"),
             };
+            save_radiosity_cache(built.radiosity.as_ref(), args)?;
             return Err(Interrupted(format!("interrupted: {saved}")).into());
         }
         Ending::TimeUp => {
@@ -532,6 +546,7 @@ fn render_frame(
             p.publish(image, status(state, done));
         }
     }
+    save_radiosity_cache(built.radiosity.as_ref(), args)?;
     progress.event("done", "");
     if args.stats {
         eprintln!("scene loaded and built in {load_seconds:.3} s");
