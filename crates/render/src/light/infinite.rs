@@ -78,6 +78,10 @@ impl Environment {
     /// Radiance arriving from direction `d` (pointing away from the scene).
     #[inline]
     pub fn radiance(&self, d: Vec3) -> Rgb {
+        // A constant sky needs no coordinates (atan2 and acos per escaped ray).
+        if let Texture::Uniform(c) = &self.radiance {
+            return *c;
+        }
         self.radiance.eval(self.uv(d))
     }
 
