@@ -13,7 +13,7 @@ use anyhow::{bail, Context, Result};
 use candela_imageio::partial::{encode_partial, Partial, PartialMeta};
 use candela_imageio::write_atomically;
 use candela_render::film::{Film, Window};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The extensions `merge -o` writes as a partial file (anything else must be an image).
 const PARTIAL_EXTENSIONS: [&str; 5] = ["part", "partial", "cpart", "ckpt", "checkpoint"];
@@ -41,7 +41,7 @@ pub fn run(args: MergeArgs) -> Result<()> {
         }
     }
     for o in &args.outputs {
-        if args.parts.iter().any(|p| same_file(p, o)) {
+        if args.parts.iter().any(|p| crate::outputs::same_file(p, o)) {
             return Err(Usage(format!(
                 "--output '{}' is one of the parts to merge",
                 o.display()
@@ -233,12 +233,4 @@ fn missing_samples(
         }
     }
     lines
-}
-
-/// True when the two paths name the same existing file.
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
-    }
 }

@@ -160,21 +160,12 @@ impl Progress {
 
     fn line(&self, event: &str, extra: &str) {
         let done = self.done.load(Ordering::Relaxed);
-        let secs = self.start.elapsed().as_secs_f64();
+        let (rays_per_s, eta, secs) = self.rates();
         let rate = if secs > 0.0 { done as f64 / secs } else { 0.0 };
         let all = self.resumed + done;
-        let eta = if rate > 0.0 {
-            format!("{:.3}", self.total.saturating_sub(all) as f64 / rate)
-        } else {
-            "null".into()
-        };
-        let traced = self.samples_traced.load(Ordering::Relaxed);
-        let rays_per_s = if traced > 0 && secs > 0.0 {
-            let per_sample = self.rays.load(Ordering::Relaxed) as f64 / traced as f64;
-            format!("{:.0}", per_sample * rate)
-        } else {
-            "null".into()
-        };
+        let num =
+            |v: Option<f64>, digits: usize| v.map_or("null".into(), |x| format!("{x:.digits$}"));
+        let (eta, rays_per_s) = (num(eta, 3), num(rays_per_s, 0));
         let frame = self.frame.map_or("null".into(), |f| f.to_string());
         let fraction = if self.total > 0 {
             all as f64 / self.total as f64

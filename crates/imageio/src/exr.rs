@@ -13,7 +13,7 @@ use std::io::Cursor;
 
 use ::exr::prelude::{
     traits::*, AnyChannel, AnyChannels, Encoding, FlatSamples, Image as ExrImage, Layer,
-    LayerAttributes, SpecificChannels, Vec2,
+    LayerAttributes,
 };
 use candela_render::{Image, Rgb};
 
@@ -90,20 +90,7 @@ pub fn read_exr_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageErro
 
 /// Encodes `img` as an OpenEXR file with f32 RGB channels.
 pub fn write_exr(img: &Image) -> Result<Vec<u8>, ImageError> {
-    check_size(img.width(), img.height())?;
-    let channels = SpecificChannels::rgb(|Vec2(x, y)| {
-        let p = img.get(x, y);
-        (p.r, p.g, p.b)
-    });
-    let mut out = Cursor::new(Vec::new());
-    ExrImage::from_channels((img.width(), img.height()), channels)
-        .write()
-        .to_buffered(&mut out)
-        .map_err(|cause| ImageError::Exr {
-            action: "encode",
-            cause,
-        })?;
-    Ok(out.into_inner())
+    write_exr_layers(img, &[])
 }
 
 /// Extra per-pixel data written beside the colour: arbitrary output variables.
@@ -147,7 +134,7 @@ pub fn write_exr_layers(img: &Image, layers: &[AovLayer]) -> Result<Vec<u8>, Ima
     let layer = Layer::new(
         (img.width(), img.height()),
         LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
+        Encoding::default(),
         channels,
     );
     let mut out = Cursor::new(Vec::new());
@@ -223,7 +210,9 @@ fn channel_names(layer: Option<&FlatLayer>) -> String {
 
 #[cfg(test)]
 mod tests {
-    use ::exr::prelude::{f16, Encoding, ImageAttributes, IntegerBounds, LayerAttributes};
+    use ::exr::prelude::{
+        f16, Encoding, ImageAttributes, IntegerBounds, LayerAttributes, SpecificChannels, Vec2,
+    };
 
     use super::*;
 

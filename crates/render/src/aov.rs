@@ -83,10 +83,10 @@ pub fn emission_aa(
     let mut sum = [0.0f32; 3];
     for k in 0..EDGE_RAYS {
         let h = crate::sampling::pcg::hash2(key, k as u64);
-        let jitter = |bits: u64| (bits & 0xff_ffff) as f32 / (1 << 24) as f32;
+        let [jx, jy] = crate::sampling::pcg::unit_pair(h);
         let u = [
-            ((k % side) as f32 + jitter(h)) / side as f32,
-            ((k / side) as f32 + jitter(h >> 32)) / side as f32,
+            ((k % side) as f32 + jx) / side as f32,
+            ((k / side) as f32 + jy) / side as f32,
         ];
         let (ray, w) = ray_at(u);
         if let Some(si) = scene.interact(&ray, stats) {

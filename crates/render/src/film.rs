@@ -196,18 +196,12 @@ impl Film {
     /// (black outside the window and where no sample arrived).
     pub fn rgb(&self, first: usize) -> Image {
         let mut img = Image::new(self.width, self.height);
-        let c = self.channels;
-        for y in self.window.y0..self.window.y1 {
-            for x in self.window.x0..self.window.x1 {
-                let i = (y - self.window.y0) * self.window.width() + (x - self.window.x0);
-                let n = self.counts[i];
-                if n == 0 {
-                    continue;
-                }
-                let mean =
-                    |ch: usize| (from_fixed(self.sums[i * c + first + ch]) / n as f64) as f32;
-                img.set(x, y, Rgb::new(mean(0), mean(1), mean(2)));
-            }
+        for (p, v) in img
+            .pixels_mut()
+            .iter_mut()
+            .zip(self.means(first, 3).chunks(3))
+        {
+            *p = Rgb::new(v[0], v[1], v[2]);
         }
         img
     }

@@ -19,6 +19,7 @@ use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
 use crate::integrator::Integrator;
 use crate::math::{Point3, Ray, Vec3, BATCH};
+use crate::sampling::pcg::{hash2, unit_pair};
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::stats::RayStats;
@@ -254,18 +255,13 @@ fn render_pixel(
 #[inline]
 fn camera_ray(
     scene: &Scene,
-    (w, h): (f32, f32),
+    size: (f32, f32),
     (x, y): (usize, usize),
     i: u32,
     (sampler, filter): (&mut Sampler, &FilterSampler),
 ) -> (Ray, f32) {
-    let ([sx, sy], weight) = filter.sample(sampler.pixel_sample(i));
-    let u = (x as f32 + sx) / w;
-    let v = 1.0 - (y as f32 + sy) / h;
-    let ray = match scene.camera.lens {
-        None => scene.camera.ray(u, v),
-        Some(_) => scene.camera.ray_through_lens(u, v, sampler.next_2d()),
-    };
+    let (offset, weight) = filter.sample(sampler.pixel_sample(i));
+    let ray = ray_through(scene, size, (x, y), offset, || sampler.next_2d());
     (ray, weight)
 }
 
@@ -273,29 +269,38 @@ fn camera_ray(
 /// filter weight (lens cameras: a lens point hashed from `key` and `u`).
 fn camera_ray_at(
     scene: &Scene,
-    (w, h): (f32, f32),
+    size: (f32, f32),
     (x, y): (usize, usize),
     u: [f32; 2],
     key: u64,
     filter: &FilterSampler,
 ) -> (Ray, f32) {
-    let ([sx, sy], weight) = filter.sample(u);
-    let (pu, pv) = ((x as f32 + sx) / w, 1.0 - (y as f32 + sy) / h);
-    let ray = match scene.camera.lens {
-        None => scene.camera.ray(pu, pv),
-        Some(_) => {
-            let hsh = crate::sampling::pcg::hash2(
-                key,
-                u[0].to_bits() as u64 | (u[1].to_bits() as u64) << 32,
-            );
-            let lens = [
-                (hsh & 0xff_ffff) as f32 / (1 << 24) as f32,
-                ((hsh >> 32) & 0xff_ffff) as f32 / (1 << 24) as f32,
-            ];
-            scene.camera.ray_through_lens(pu, pv, lens)
-        }
+    let (offset, weight) = filter.sample(u);
+    let lens = || {
+        unit_pair(hash2(
+            key,
+            u[0].to_bits() as u64 | (u[1].to_bits() as u64) << 32,
+        ))
     };
-    (ray, weight)
+    (ray_through(scene, size, (x, y), offset, lens), weight)
+}
+
+/// The camera ray through the point `offset` (in pixels from the corner) of pixel (x, y) of a
+/// `w × h` image; `lens` gives the lens point of cameras that have one.
+#[inline]
+fn ray_through(
+    scene: &Scene,
+    (w, h): (f32, f32),
+    (x, y): (usize, usize),
+    [sx, sy]: [f32; 2],
+    lens: impl FnOnce() -> [f32; 2],
+) -> Ray {
+    let u = (x as f32 + sx) / w;
+    let v = 1.0 - (y as f32 + sy) / h;
+    match scene.camera.lens {
+        None => scene.camera.ray(u, v),
+        Some(_) => scene.camera.ray_through_lens(u, v, lens()),
+    }
 }
 
 /// Appends to `sums` the fixed-point sums of the output variables of samples `first..last` of
@@ -333,15 +338,12 @@ fn aov_pixel(
         })
     };
     let (emission, emission_aa) = (offset(Aov::Emission), offset(Aov::EmissionAa));
-    let pixel_key = crate::sampling::pcg::hash2(settings.seed, (y * settings.width + x) as u64);
+    let pixel_key = hash2(settings.seed, (y * settings.width + x) as u64);
     let edge = emission_aa.is_some()
         && near_light_edge(
             scene,
             (2.0 * filter.filter().radius()).max(1.0),
-            &mut |[sx, sy]| {
-                let (pu, pv) = ((x as f32 + sx) / size.0, 1.0 - (y as f32 + sy) / size.1);
-                scene.camera.ray(pu, pv)
-            },
+            &mut |offset| ray_through(scene, size, (x, y), offset, || [0.5, 0.5]),
             stats,
         );
     for i in first..last {
@@ -354,7 +356,7 @@ fn aov_pixel(
             }
         }
         if let (Some(at), true) = (emission_aa, edge) {
-            let key = crate::sampling::pcg::hash2(pixel_key, i as u64);
+            let key = hash2(pixel_key, i as u64);
             let e = emission_aa_of(
                 scene,
                 &mut |u| camera_ray_at(scene, size, (x, y), u, key, filter),

@@ -88,6 +88,13 @@ pub fn hash2(a: u64, b: u64) -> u64 {
     mix64(a ^ mix64(b.wrapping_add(0x9e3779b97f4a7c15)))
 }
 
+/// Two uniform numbers in [0, 1) from the two halves of a hash (24 bits each).
+#[inline]
+pub fn unit_pair(h: u64) -> [f32; 2] {
+    let unit = |bits: u64| (bits & 0xff_ffff) as f32 / (1 << 24) as f32;
+    [unit(h), unit(h >> 32)]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
