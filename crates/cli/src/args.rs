@@ -63,6 +63,11 @@ pub struct RenderArgs {
     /// The integrator.
     #[arg(long, value_name = "NAME")]
     pub integrator: Option<String>,
+    /// Spectral rendering: radiance per wavelength (four wavelengths per path, hero-wavelength
+    /// sampling), turned into colour through the CIE 1931 observer; measured spectra,
+    /// blackbodies and dispersion take effect. For path, direct, local and whitted.
+    #[arg(long)]
+    pub spectral: bool,
     /// Path length limit (-1: unlimited with Russian roulette).
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(i32).range(-1..=100_000))]
     pub max_depth: Option<i32>,

@@ -41,6 +41,7 @@ pub fn pixel_settings(
         ("seed".to_string(), settings.seed.to_string()),
         ("sampler".to_string(), format!("{:?}", settings.sampler)),
         ("filter".to_string(), format!("{:?}", settings.filter)),
+        ("spectral".to_string(), settings.spectral.to_string()),
         ("integrator".to_string(), format!("{kind:?}")),
         (
             "max_depth".to_string(),

@@ -271,7 +271,7 @@ fn save_radiosity_cache(outcome: Option<&RadiosityOutcome>, args: &RenderArgs) -
 }
 
 fn render_frame(
-    loaded: LoadedScene,
+    mut loaded: LoadedScene,
     args: &RenderArgs,
     defines: &[(String, String)],
     paths: &FramePaths,
@@ -315,7 +315,23 @@ fn render_frame(
             .and_then(candela_render::filter::Filter::by_name)
             .or(hints.filter)
             .unwrap_or_default(),
+        spectral: args.spectral,
     };
+    if args.spectral {
+        if matches!(
+            kind,
+            IntegratorKind::Radiosity
+                | IntegratorKind::OnOff
+                | IntegratorKind::Flat
+                | IntegratorKind::Normals
+                | IntegratorKind::Depth
+        ) {
+            anyhow::bail!(
+                "--spectral: the {name} integrator computes colours, not radiance per wavelength (spectral rendering is for path, direct, local and whitted)"
+            );
+        }
+        loaded.scene.prepare_spectral();
+    }
     crate::inputs::check_render(settings.width, settings.height, args)?;
     // What this job renders: a window of the frame and a range of sample indices.
     let window = match args.crop {

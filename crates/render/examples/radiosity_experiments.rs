@@ -261,6 +261,7 @@ fn point_light_debug() {
         PointLight {
             position: Point3::new(1.5, 0.0, 0.0),
             intensity: candela_render::Rgb::splat(10.0),
+            spectrum: None,
             falloff: Default::default(),
         },
         Components::from_intensity(candela_render::Rgb::splat(10.0)),

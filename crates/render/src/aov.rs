@@ -15,6 +15,7 @@
 use crate::interaction::SurfaceInteraction;
 use crate::math::Ray;
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 use crate::stats::RayStats;
 
 /// Longest chain of mirror and glass bounces followed for albedo and normal.
@@ -62,9 +63,13 @@ pub fn near_light_edge(
     for k in 0..36 {
         let at = |i: usize| 0.5 - half + 2.0 * half * i as f32 / 5.0;
         let ray = ray_at([at(k % 6), at(k / 6)]);
-        let emits = scene
-            .interact(&ray, stats)
-            .is_some_and(|si| scene.emitted(&si).max_component() > 0.0);
+        let emits = scene.interact(&ray, stats).is_some_and(|si| {
+            scene
+                .emitted(&si, &Wavelengths::Rgb)
+                .to_rgb()
+                .max_component()
+                > 0.0
+        });
         lit |= emits;
         dark |= !emits;
     }
@@ -90,7 +95,7 @@ pub fn emission_aa(
         ];
         let (ray, w) = ray_at(u);
         if let Some(si) = scene.interact(&ray, stats) {
-            let e = scene.emitted(&si) * w;
+            let e = scene.emitted(&si, &Wavelengths::Rgb).to_rgb() * w;
             sum[0] += e.r;
             sum[1] += e.g;
             sum[2] += e.b;
@@ -193,7 +198,9 @@ pub fn aov_sample(scene: &Scene, ray: &Ray, set: AovSet, out: &mut [f32], stats:
     if set.contains(Aov::Albedo) || set.contains(Aov::Normal) {
         let mut si = first;
         for _ in 0..=SPECULAR_CHAIN {
-            let bsdf = scene.material(&si).bsdf(si.shading_frame(), si.uv);
+            let bsdf = scene
+                .material(&si)
+                .bsdf(si.shading_frame(), si.uv, &mut Wavelengths::Rgb);
             if !bsdf.is_delta() {
                 diffuse = Some(si);
                 break;
@@ -214,7 +221,7 @@ pub fn aov_sample(scene: &Scene, ray: &Ray, set: AovSet, out: &mut [f32], stats:
             Aov::Albedo => &diffuse.map_or([0.0; 3], |si| {
                 // An emitter's albedo is its colour (the emission scaled to a maximum of 1), so
                 // that the denoiser keeps lights apart from the dark surfaces around them.
-                let e = scene.emitted(&si);
+                let e = scene.emitted(&si, &Wavelengths::Rgb).to_rgb();
                 let c = if e.max_component() > 0.0 {
                     e * (1.0 / e.max_component())
                 } else {
@@ -233,7 +240,7 @@ pub fn aov_sample(scene: &Scene, ray: &Ray, set: AovSet, out: &mut [f32], stats:
             // The antialiased emission starts as the sample's own (the caller refines it at
             // the edges of lights).
             Aov::Emission | Aov::EmissionAa => &{
-                let e = scene.emitted(&first);
+                let e = scene.emitted(&first, &Wavelengths::Rgb).to_rgb();
                 [e.r, e.g, e.b]
             },
         };

@@ -13,7 +13,6 @@
 //! [`RayStats::rejected_samples`]): they count as samples but contribute zero.
 
 use crate::aov::{aov_sample, emission_aa as emission_aa_of, near_light_edge, Aov, AovSet};
-use crate::color::Rgb;
 use crate::film::{to_fixed, Film, Window};
 use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
@@ -22,6 +21,7 @@ use crate::math::{Point3, Ray, Vec3, BATCH};
 use crate::sampling::pcg::{hash2, unit_pair};
 use crate::sampling::{Sampler, SamplerKind};
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -46,6 +46,11 @@ pub struct RenderSettings {
     pub aovs: AovSet,
     /// The reconstruction filter the pixel samples are drawn from.
     pub filter: Filter,
+    /// Trace radiance per wavelength (four per path, hero-wavelength sampling) and turn it into
+    /// colour through the CIE observer; integrators whose result is a colour by definition
+    /// ([`Integrator::spectral`] false) stay RGB. The scene should be prepared with
+    /// [`Scene::prepare_spectral`] (only for speed).
+    pub spectral: bool,
 }
 
 impl Default for RenderSettings {
@@ -58,6 +63,7 @@ impl Default for RenderSettings {
             sampler: SamplerKind::Sobol,
             aovs: AovSet::NONE,
             filter: Filter::Box,
+            spectral: false,
         }
     }
 }
@@ -217,25 +223,35 @@ fn render_pixel(
     // its own place in the pixel's sample sequence.
     let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
     let mut cursors = [sampler.cursor(); BATCH];
-    let mut radiance = [Rgb::BLACK; BATCH];
+    let mut radiance = [SampledSpectrum::ZERO; BATCH];
     let mut weights = [1f32; BATCH];
+    let mut lambdas = [Wavelengths::Rgb; BATCH];
+    let spectral = settings.spectral && integrator.spectral();
     for start in (first..last).step_by(BATCH) {
         let n = (last - start).min(BATCH as u32) as usize;
         for k in 0..n {
             (rays[k], weights[k]) =
                 camera_ray(scene, (w, h), (x, y), start + k as u32, (sampler, filter));
+            // The sample's wavelengths: the number after the camera's.
+            lambdas[k] = if spectral {
+                Wavelengths::sample(sampler.next_1d())
+            } else {
+                Wavelengths::Rgb
+            };
             cursors[k] = sampler.cursor();
         }
         integrator.radiance_batch(
             scene,
             &rays[..n],
+            &mut lambdas[..n],
             &mut cursors[..n],
             sampler,
             stats,
             &mut radiance[..n],
         );
-        for (l, &weight) in radiance[..n].iter().zip(&weights) {
-            let l = if weight == 1.0 { *l } else { *l * weight };
+        for ((l, &weight), lambda) in radiance[..n].iter().zip(&weights).zip(&lambdas) {
+            let l = lambda.to_rgb(*l);
+            let l = if weight == 1.0 { l } else { l * weight };
             stats.samples += 1;
             if l.is_finite() {
                 sum[0] += to_fixed(l.r);
@@ -378,6 +394,7 @@ fn aov_pixel(
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
+    use crate::color::Rgb;
     use crate::material::Material;
     use crate::math::{Point3, Ray, Transform, Vec3};
     use crate::scene::SceneBuilder;
@@ -387,19 +404,33 @@ mod tests {
     /// An integrator that returns its random numbers, to expose the seeding.
     struct Noise;
     impl Integrator for Noise {
-        fn radiance(&self, _: &Scene, ray: &Ray, s: &mut Sampler, _: &mut RayStats) -> Rgb {
-            Rgb::new(s.next_1d(), s.next_1d(), ray.d.z)
+        fn radiance(
+            &self,
+            _: &Scene,
+            ray: &Ray,
+            _: &mut Wavelengths,
+            s: &mut Sampler,
+            _: &mut RayStats,
+        ) -> SampledSpectrum {
+            Rgb::new(s.next_1d(), s.next_1d(), ray.d.z).into()
         }
     }
 
     /// An integrator that returns NaN on the left half of the image.
     struct Poison;
     impl Integrator for Poison {
-        fn radiance(&self, _: &Scene, ray: &Ray, _: &mut Sampler, _: &mut RayStats) -> Rgb {
+        fn radiance(
+            &self,
+            _: &Scene,
+            ray: &Ray,
+            _: &mut Wavelengths,
+            _: &mut Sampler,
+            _: &mut RayStats,
+        ) -> SampledSpectrum {
             if ray.d.y > 0.0 {
-                Rgb::new(f32::NAN, 0.0, f32::INFINITY)
+                Rgb::new(f32::NAN, 0.0, f32::INFINITY).into()
             } else {
-                Rgb::WHITE
+                SampledSpectrum::ONE
             }
         }
     }

@@ -11,6 +11,7 @@ use crate::material::{Material, MaterialId};
 use crate::math::{Point3, Ray, RayBatch, Transform, Vec3};
 use crate::sampling::pcg::hash2;
 use crate::shape::{Mesh, Shape, ShearedRay};
+use crate::spectrum::{RgbRole, SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// A scene ready to render.
@@ -42,13 +43,40 @@ pub struct Scene {
 const MAX_MASK_LAYERS: usize = 256;
 
 impl Scene {
-    /// The radiance arriving from direction `d` along a ray that escaped the scene.
-    pub fn escaped(&self, d: Vec3) -> Rgb {
+    /// The radiance arriving from direction `d` along a ray that escaped the scene, in the
+    /// lanes of `lambda`.
+    pub fn escaped(&self, d: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
         self.infinite_lights
             .iter()
-            .fold(self.background, |acc, &i| {
-                acc + self.lights[i as usize].escaped(d)
+            .fold(self.background(lambda), |acc, &i| {
+                acc + self.lights[i as usize].escaped(d, lambda)
             })
+    }
+
+    /// The background colour in the lanes of `lambda` (an emitter's colour).
+    #[inline]
+    pub fn background(&self, lambda: &Wavelengths) -> SampledSpectrum {
+        if self.background.is_black() {
+            return SampledSpectrum::ZERO;
+        }
+        lambda.colour(self.background, RgbRole::Emission)
+    }
+
+    /// Readies the scene for spectral rendering: the uniform colours of materials, emitters
+    /// and environments are upsampled once here rather than at every use. RGB renders of the
+    /// prepared scene are unchanged.
+    pub fn prepare_spectral(&mut self) {
+        for m in &mut self.materials {
+            m.prepare_spectral();
+        }
+        for e in &mut self.emissions {
+            e.radiance.prepare_spectral(RgbRole::Emission);
+        }
+        for l in &mut self.lights {
+            if let Light::Environment(e) = l {
+                e.radiance.prepare_spectral(RgbRole::Emission);
+            }
+        }
     }
 
     /// The closest hit along `ray`. A surface with a stochastic opacity α is hit with
@@ -242,12 +270,13 @@ impl Scene {
         &self.materials[si.props.material as usize]
     }
 
-    /// The radiance emitted by the surface of `si` back along the ray.
+    /// The radiance emitted by the surface of `si` back along the ray, in the lanes of
+    /// `lambda`.
     #[inline]
-    pub fn emitted(&self, si: &SurfaceInteraction) -> Rgb {
+    pub fn emitted(&self, si: &SurfaceInteraction, lambda: &Wavelengths) -> SampledSpectrum {
         match si.props.emission {
-            Some(e) => self.emissions[e as usize].radiance(si, si.wo),
-            None => Rgb::BLACK,
+            Some(e) => self.emissions[e as usize].radiance(si, si.wo, lambda),
+            None => SampledSpectrum::ZERO,
         }
     }
 }

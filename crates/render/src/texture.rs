@@ -5,10 +5,18 @@
 //! - `image("file")`: the image pixel at column ⌊u·W⌋ and row ⌊v·H⌋ (row 0 at the top; clamped)
 //!   with nearest filtering, as in the course. Image textures may also filter bilinearly, repeat
 //!   instead of clamping, and scale and offset (u, v) first (Mitsuba's `bitmap` and `envmap`).
+//! - a [`Spectrum`] (a tabulated or measured spectrum, a blackbody, or an RGB colour upsampled
+//!   once when the scene is prepared for spectral rendering): the same everywhere, its RGB
+//!   conversion in RGB mode.
+//!
+//! [`Texture::eval`] gives the RGB colour; [`Texture::spectral`] gives the four lanes a path
+//! carries ([`Wavelengths`]): the RGB colour in RGB mode, the spectrum at the sampled wavelengths
+//! in spectral mode (RGB colours upsampled according to what they stand for, [`RgbRole`]).
 
 use crate::color::Rgb;
 use crate::image::Image;
 use crate::math::Point2;
+use crate::spectrum::{upsample, RgbRole, SampledSpectrum, Spectrum, Wavelengths};
 use std::sync::Arc;
 
 /// How an image texture is looked up.
@@ -113,6 +121,13 @@ pub enum Texture {
     },
     /// An image mapped onto the uv square.
     Image(ImageTexture),
+    /// A spectrum, the same everywhere.
+    Spectral {
+        /// Its colour in RGB mode (the conversion Mitsuba's RGB variants make).
+        rgb: Rgb,
+        /// The spectrum.
+        spectrum: Arc<Spectrum>,
+    },
 }
 
 impl Texture {
@@ -123,6 +138,33 @@ impl Texture {
         match self {
             Texture::Uniform(c) => *c,
             _ => self.eval_varying(uv),
+        }
+    }
+
+    /// The value at (u, v) in the lanes of a path: the colour in RGB mode; in spectral mode
+    /// the spectrum at the sampled wavelengths (RGB colours upsampled in `role`).
+    #[inline(always)]
+    pub fn spectral(&self, uv: Point2, w: &Wavelengths, role: RgbRole) -> SampledSpectrum {
+        match (self, w) {
+            (_, Wavelengths::Rgb) => SampledSpectrum::from_rgb(self.eval(uv)),
+            (Texture::Spectral { spectrum, .. }, Wavelengths::Sampled(s)) => spectrum.eval4(s),
+            _ => w.colour(self.eval(uv), role),
+        }
+    }
+
+    /// A spectrum as a texture (`rgb`: its colour in RGB mode).
+    pub fn spectrum(spectrum: Spectrum, rgb: Rgb) -> Self {
+        Texture::Spectral {
+            rgb,
+            spectrum: Arc::new(spectrum),
+        }
+    }
+
+    /// Readies the texture for spectral rendering in `role`: a uniform colour is upsampled
+    /// once here rather than at every lookup. Nothing changes in RGB mode.
+    pub fn prepare_spectral(&mut self, role: RgbRole) {
+        if let Texture::Uniform(c) = *self {
+            *self = Texture::spectrum(upsample(c, role), c);
         }
     }
 
@@ -146,13 +188,14 @@ impl Texture {
                 }
             }
             Texture::Image(t) => t.eval(uv),
+            Texture::Spectral { rgb, .. } => *rgb,
         }
     }
 
     /// The average colour (exact for uniform and checkered, the pixel mean for images).
     pub fn average(&self) -> Rgb {
         match self {
-            Texture::Uniform(c) => *c,
+            Texture::Uniform(c) | Texture::Spectral { rgb: c, .. } => *c,
             Texture::Checkered { c1, c2, .. } => (*c1 + *c2) * 0.5,
             Texture::Image(t) => {
                 let m = t.image.mean();
@@ -164,7 +207,7 @@ impl Texture {
     /// The largest value of any channel anywhere (for bounds on emitted power).
     pub fn max_value(&self) -> f32 {
         match self {
-            Texture::Uniform(c) => c.max_component(),
+            Texture::Uniform(c) | Texture::Spectral { rgb: c, .. } => c.max_component(),
             Texture::Checkered { c1, c2, .. } => c1.max_component().max(c2.max_component()),
             Texture::Image(t) => t
                 .image

@@ -14,6 +14,7 @@ use candela_render::material::{
 };
 use candela_render::math::{Frame, Point2, Vec3};
 use candela_render::sampling::Pcg32;
+use candela_render::spectrum::Wavelengths;
 use candela_render::texture::Texture;
 use candela_render::Rgb;
 use chi2::{agrees_up_to_rounding, mean_and_error, rounding_spread, sidak, Chi2, Grid, ALPHA};
@@ -134,8 +135,11 @@ struct Case {
     mass: Option<f64>,
 }
 
-fn gold() -> Option<(Rgb, Rgb)> {
-    Some((Rgb::new(0.143, 0.374, 1.442), Rgb::new(3.983, 2.385, 1.603)))
+fn gold() -> Option<(Texture, Texture)> {
+    Some((
+        Texture::Uniform(Rgb::new(0.143, 0.374, 1.442)),
+        Texture::Uniform(Rgb::new(3.983, 2.385, 1.603)),
+    ))
 }
 
 /// Every χ² configuration of the suite (the Šidák correction counts them all).
@@ -213,6 +217,7 @@ fn cases() -> Vec<Case> {
                             if inside { "inside" } else { "outside" }
                         ),
                         material: Material::two_sided(Model::Dielectric {
+                            dispersion: None,
                             eta,
                             reflectance: tex(1.0),
                             transmittance: tex(1.0),
@@ -325,7 +330,9 @@ fn run_family(family: Family) {
     let mut failures = Vec::new();
     let mut worst = (f64::INFINITY, String::new());
     for case in all.iter().filter(|c| c.family == family) {
-        let bsdf = case.material.bsdf(fr, Point2::new(0.5, 0.5));
+        let bsdf = case
+            .material
+            .bsdf(fr, Point2::new(0.5, 0.5), &mut Wavelengths::Rgb);
         let wo = fr.to_world(case.wo);
         for (k, &(axis, power)) in case.grids.iter().enumerate() {
             let name = format!("{} (grid {k})", case.name);
@@ -526,6 +533,7 @@ fn materials() -> Vec<(String, Material)> {
     v.push((
         "coloured rough glass".into(),
         Material::two_sided(Model::Dielectric {
+            dispersion: None,
             eta: 1.33,
             reflectance: colour(0.9, 1.0, 0.8),
             transmittance: colour(0.3, 0.6, 1.0),
@@ -545,7 +553,7 @@ fn weights_are_eval_over_pdf() {
     let mut rng = Pcg32::new(11, 3);
     let mut failures = Vec::new();
     for (name, m) in materials() {
-        let bsdf = m.bsdf(fr, Point2::new(0.5, 0.5));
+        let bsdf = m.bsdf(fr, Point2::new(0.5, 0.5), &mut Wavelengths::Rgb);
         let (mut bad_weight, mut bad_pdf, mut unsampled, mut none) = (0, 0, 0, 0);
         let mut example = String::new();
         let n = 4000;
@@ -579,11 +587,12 @@ fn weights_are_eval_over_pdf() {
                 example = format!("wo={wo:?} wi={:?}: sample pdf {} vs pdf {p}", s.wi, s.pdf);
             }
             let w = bsdf.eval(wo, s.wi) / p;
-            let channel =
-                |c: usize| move |d: Vec3| (bsdf.eval(wo, d) / bsdf.pdf(wo, d)).to_array()[c];
-            if !(0..3)
-                .all(|c| agrees_up_to_rounding(s.weight.to_array()[c], s.wi, 1e-3, channel(c)))
-            {
+            let channel = |c: usize| {
+                move |d: Vec3| (bsdf.eval(wo, d) / bsdf.pdf(wo, d)).to_rgb().to_array()[c]
+            };
+            if !(0..3).all(|c| {
+                agrees_up_to_rounding(s.weight.to_rgb().to_array()[c], s.wi, 1e-3, channel(c))
+            }) {
                 bad_weight += 1;
                 example = format!(
                     "wo={wo:?} wi={:?}: weight {:?} vs eval/pdf {w:?}",
@@ -633,7 +642,7 @@ fn delta_models_reflect_and_refract_correctly() {
         reflectance: Texture::Uniform(r),
         mf: None,
     });
-    let (eta_c, k_c) = gold().unwrap();
+    let (eta_c, k_c) = gold().map(|(e, k)| (e.average(), k.average())).unwrap();
     let gold_mat = Material::two_sided(Model::Conductor {
         eta_k: gold(),
         reflectance: tex(1.0),
@@ -660,7 +669,7 @@ fn delta_models_reflect_and_refract_correctly() {
                     ),
                 ),
             ] {
-                let b = m.bsdf(fr, uv);
+                let b = m.bsdf(fr, uv, &mut Wavelengths::Rgb);
                 assert!(b.is_delta(), "{name}");
                 let s = b
                     .sample(wo, 0.3, [0.2, 0.9])
@@ -678,7 +687,7 @@ fn delta_models_reflect_and_refract_correctly() {
                 );
                 assert_eq!(
                     (b.eval(wo, s.wi), b.pdf(wo, s.wi)),
-                    (Rgb::BLACK, 0.0),
+                    (Rgb::BLACK.into(), 0.0),
                     "{name}"
                 );
             }
@@ -688,12 +697,13 @@ fn delta_models_reflect_and_refract_correctly() {
     let (rr, tt) = (Rgb::new(0.9, 0.8, 0.7), Rgb::new(0.6, 0.5, 0.4));
     for eta in [1.5f32, 1.0 / 1.5, 1.33] {
         let glass = Material::two_sided(Model::Dielectric {
+            dispersion: None,
             eta,
             reflectance: Texture::Uniform(rr),
             transmittance: Texture::Uniform(tt),
             mf: None,
         });
-        let b = glass.bsdf(fr, uv);
+        let b = glass.bsdf(fr, uv, &mut Wavelengths::Rgb);
         assert!(b.is_delta());
         for th in [0.0f32, 15.0, 30.0, 40.0, 41.0, 43.0, 60.0, 80.0, 89.0] {
             for inside in [false, true] {
@@ -778,7 +788,7 @@ fn delta_models_reflect_and_refract_correctly() {
         eta: ETA,
         nonlinear: false,
     });
-    let b = plastic.bsdf(fr, uv);
+    let b = plastic.bsdf(fr, uv, &mut Wavelengths::Rgb);
     assert!(!b.is_delta());
     for th in [0.0f32, 45.0, 80.0] {
         let wl = local(th, 10.0);
@@ -853,6 +863,7 @@ fn energy_conservation() {
             models.push((
                 format!("rough dielectric {dn} α={alpha}"),
                 white(Model::Dielectric {
+                    dispersion: None,
                     eta: ETA,
                     reflectance: tex(1.0),
                     transmittance: tex(1.0),
@@ -913,7 +924,7 @@ fn energy_conservation() {
         }
     }
     for (name, m, slack) in &models {
-        let b = m.bsdf(fr, uv);
+        let b = m.bsdf(fr, uv, &mut Wavelengths::Rgb);
         let mut row = format!("{name}:");
         for th in [0.0f32, 30.0, 60.0, 85.0] {
             let wo = fr.to_world(local(th, 20.0));
@@ -985,6 +996,7 @@ fn energy_conservation() {
         (
             "white smooth dielectric η=1.5",
             white(Model::Dielectric {
+                dispersion: None,
                 eta: ETA,
                 reflectance: tex(1.0),
                 transmittance: tex(1.0),
@@ -994,6 +1006,7 @@ fn energy_conservation() {
         (
             "white smooth dielectric η=1/1.5",
             white(Model::Dielectric {
+                dispersion: None,
                 eta: 1.0 / ETA,
                 reflectance: tex(1.0),
                 transmittance: tex(1.0),
@@ -1002,7 +1015,7 @@ fn energy_conservation() {
         ),
     ];
     for (name, m) in &lossless {
-        let b = m.bsdf(fr, uv);
+        let b = m.bsdf(fr, uv, &mut Wavelengths::Rgb);
         let mut row = format!("{name}:");
         for th in [0.0f32, 30.0, 60.0, 85.0] {
             for inside in [false, true] {
@@ -1035,7 +1048,7 @@ fn reciprocity() {
     let mut rng = Pcg32::new(5, 9);
     let mut failures = Vec::new();
     for (name, m) in materials() {
-        let b = m.bsdf(fr, uv);
+        let b = m.bsdf(fr, uv, &mut Wavelengths::Rgb);
         let eta = match &m.model {
             Model::Dielectric { eta, .. } => Some(*eta),
             _ => None,
@@ -1074,9 +1087,9 @@ fn reciprocity() {
             // Relative 2e-3, or within what the rounding of wi changes at ill-conditioned pairs
             // (a microfacet seen at a grazing angle, where 1 − F has an infinite slope).
             let ok = |c: usize| {
-                let (x, y) = (l.to_array()[c], r.to_array()[c]);
-                let spread = rounding_spread(wi, |d| left(d).to_array()[c])
-                    + rounding_spread(wi, |d| right(d).to_array()[c]);
+                let (x, y) = (l.to_rgb().to_array()[c], r.to_rgb().to_array()[c]);
+                let spread = rounding_spread(wi, |d| left(d).to_rgb().to_array()[c])
+                    + rounding_spread(wi, |d| right(d).to_rgb().to_array()[c]);
                 (x - y).abs() <= 2e-3 * x.abs().max(y.abs()) + 1e-6 + 2.0 * spread
             };
             if !(ok(0) && ok(1) && ok(2)) {

@@ -98,6 +98,7 @@ fn lossless_materials_vanish_in_a_white_furnace() {
         (
             "clear glass",
             Model::Dielectric {
+                dispersion: None,
                 eta: 1.5,
                 reflectance: Texture::Uniform(Rgb::WHITE),
                 transmittance: Texture::Uniform(Rgb::WHITE),
@@ -160,6 +161,7 @@ fn lossless_materials_vanish_in_a_white_furnace() {
 fn roulette_inside_glass_keeps_the_variance_low() {
     let mut b = SceneBuilder::new();
     let m = b.add_material(Material::two_sided(Model::Dielectric {
+        dispersion: None,
         eta: 1.5,
         reflectance: Texture::Uniform(Rgb::WHITE),
         transmittance: Texture::Uniform(Rgb::WHITE),

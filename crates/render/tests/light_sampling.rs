@@ -12,6 +12,7 @@ use support::chi2;
 use std::sync::Arc;
 
 use candela_render::accel::AccelKind;
+
 use candela_render::image::Image;
 use candela_render::interaction::SurfaceProps;
 use candela_render::light::Emission;
@@ -20,6 +21,7 @@ use candela_render::material::Material;
 use candela_render::math::{Point2, Point3, Ray, Transform, Vec3, PI};
 use candela_render::sampling::Pcg32;
 use candela_render::shape::{Cube, Disk, Mesh, Parallelogram, Shape, Sphere};
+use candela_render::spectrum::Wavelengths;
 use candela_render::stats::RayStats;
 use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene, SceneBuilder};
@@ -150,7 +152,7 @@ fn scene(e: Emitter, two_sided: bool) -> Scene {
 /// A sample of `light` from `p` that the point really sees (samples on the hidden side of a
 /// closed emitter are occluded by its front, and count as "no direction").
 fn visible_sample(s: &Scene, light: &Light, p: Point3, u: [f32; 2]) -> Option<(Vec3, f32, Rgb)> {
-    let ls = light.sample(&s.geometry, &s.emissions, p, u)?;
+    let ls = light.sample(&s.geometry, &s.emissions, p, u, &Wavelengths::Rgb)?;
     match ls.target {
         Target::Surface(q, _) => {
             if !s.visible(p, q, &mut RayStats::default()) {
@@ -160,14 +162,16 @@ fn visible_sample(s: &Scene, light: &Light, p: Point3, u: [f32; 2]) -> Option<(V
         Target::Infinite => {}
         Target::Point(_) => panic!("area and infinite lights do not target points"),
     }
-    Some((ls.wi, ls.pdf, ls.li))
+    Some((ls.wi, ls.pdf, ls.li.to_rgb()))
 }
 
 /// The solid-angle density of sampling direction `d` from `p`: pdf_hit at the first hit if it
 /// is an emitting point of the light, else 0.
 fn area_pdf(s: &Scene, light: &Light, p: Point3, d: Vec3) -> f32 {
     match s.interact(&Ray::new(p, d), &mut RayStats::default()) {
-        Some(si) if !s.emitted(&si).is_black() => light.pdf_hit(p, si.p, si.n),
+        Some(si) if !s.emitted(&si, &Wavelengths::Rgb).to_rgb().is_black() => {
+            light.pdf_hit(p, si.p, si.n)
+        }
         _ => 0.0,
     }
 }
@@ -414,7 +418,13 @@ fn chi2_ellipsoid_from_outside() {
     };
     let r = test.run(
         |u| {
-            let ls = light.sample(&s.geometry, &s.emissions, p, [u[0], u[1]])?;
+            let ls = light.sample(
+                &s.geometry,
+                &s.emissions,
+                p,
+                [u[0], u[1]],
+                &Wavelengths::Rgb,
+            )?;
             let Target::Surface(q, n) = ls.target else {
                 panic!("area light")
             };
@@ -429,7 +439,10 @@ fn chi2_ellipsoid_from_outside() {
             let q = t.point(u.to_point());
             let hit = s.interact(&Ray::new(p, q - p), &mut RayStats::default());
             match hit {
-                Some(si) if (si.p - q).norm() < 1e-4 && !s.emitted(&si).is_black() => {
+                Some(si)
+                    if (si.p - q).norm() < 1e-4
+                        && !s.emitted(&si, &Wavelengths::Rgb).to_rgb().is_black() =>
+                {
                     object_density(si.p, si.n, light.pdf_hit(p, si.p, si.n))
                 }
                 _ => 0.0,

@@ -709,6 +709,7 @@ fn spheres_and_meshes_are_tessellated_into_patches() {
         PointLight {
             position: Point3::new(-2.0, 0.5, 0.0),
             intensity: Rgb::splat(10.0),
+            spectrum: None,
             falloff: Default::default(),
         },
         Components::from_intensity(Rgb::splat(10.0)),

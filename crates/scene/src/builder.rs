@@ -190,6 +190,7 @@ impl Builder<'_> {
                     }
                     Model::Dielectric {
                         eta: *ior,
+                        dispersion: None,
                         reflectance: Texture::Uniform(Rgb::WHITE),
                         transmittance: self.texture(kt)?,
                         mf: None,
@@ -265,6 +266,7 @@ impl Builder<'_> {
                     PointLight {
                         position: *position,
                         intensity: *intensity,
+                        spectrum: None,
                         falloff: Falloff {
                             radius: *radius,
                             attenuation: att(attenuation),
@@ -284,6 +286,7 @@ impl Builder<'_> {
                         position: *position,
                         axis: unit(*direction, "spot direction")?,
                         intensity: *intensity,
+                        spectrum: None,
                         cos_cutoff: cutoff_deg.to_radians().cos(),
                         profile: SpotProfile::Power(*exponent),
                         falloff: Falloff {
@@ -301,6 +304,7 @@ impl Builder<'_> {
                     DistantLight {
                         direction: unit(*direction, "light direction")?,
                         irradiance: *intensity,
+                        spectrum: None,
                     },
                     components,
                 ),

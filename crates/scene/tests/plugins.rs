@@ -5,6 +5,7 @@
 mod support;
 
 use candela_render::math::{Point3, Ray, Vec3};
+use candela_render::spectrum::Wavelengths;
 use candela_render::stats::RayStats;
 use candela_render::Scene;
 use support::mitsuba::{error_of, load, scene};
@@ -78,11 +79,24 @@ fn mitsuba_spot_lights_project_their_texture() {
     };
     // Axis +z, frame x, y: tan 45° = 1, so w = (0.2, 0.2, 1) looks up uv = (0.6, 0.6).
     let w = |x: f32, y: f32| Vec3::new(x, y, 1.0).normalize();
-    assert_eq!(spot.pattern(w(0.2, 0.2)), Rgb::new(1.0, 0.0, 0.0));
-    assert_eq!(spot.pattern(w(-0.2, -0.2)), Rgb::new(1.0, 0.0, 0.0));
-    assert_eq!(spot.pattern(w(0.2, -0.2)), Rgb::new(0.0, 0.0, 1.0));
+    assert_eq!(
+        spot.pattern(w(0.2, 0.2), &Wavelengths::Rgb).to_rgb(),
+        Rgb::new(1.0, 0.0, 0.0)
+    );
+    assert_eq!(
+        spot.pattern(w(-0.2, -0.2), &Wavelengths::Rgb).to_rgb(),
+        Rgb::new(1.0, 0.0, 0.0)
+    );
+    assert_eq!(
+        spot.pattern(w(0.2, -0.2), &Wavelengths::Rgb).to_rgb(),
+        Rgb::new(0.0, 0.0, 1.0)
+    );
     // Behind the light: nothing.
-    assert_eq!(spot.pattern(Vec3::new(0.0, 0.0, -1.0)), Rgb::BLACK);
+    assert_eq!(
+        spot.pattern(Vec3::new(0.0, 0.0, -1.0), &Wavelengths::Rgb)
+            .to_rgb(),
+        Rgb::BLACK
+    );
 }
 
 #[test]

@@ -7,10 +7,10 @@
 //! [`BRANCHING_RAY_BUDGET`] rays: branches beyond the budget are cut (they contribute nothing).
 
 use super::Integrator;
-use crate::color::Rgb;
 use crate::math::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// Deepest path of the branching tracer (its recursion depth).
@@ -34,34 +34,46 @@ impl Integrator for CoursePath {
         &self,
         scene: &Scene,
         ray: &Ray,
+        lambda: &mut Wavelengths,
         sampler: &mut Sampler,
         stats: &mut RayStats,
-    ) -> Rgb {
+    ) -> SampledSpectrum {
         let mut budget = BRANCHING_RAY_BUDGET;
-        self.trace(scene, ray, 0, &mut budget, sampler, stats)
+        let mut t = Branches {
+            scene,
+            lambda,
+            budget: &mut budget,
+            sampler,
+            stats,
+        };
+        self.trace(&mut t, ray, 0)
     }
 }
 
+/// What the branches share: the scene, the sample's wavelengths (a dispersive interface
+/// anywhere in the tree keeps only the hero), the ray budget, the sampler and the counters.
+struct Branches<'a> {
+    scene: &'a Scene,
+    lambda: &'a mut Wavelengths,
+    budget: &'a mut u32,
+    sampler: &'a mut Sampler,
+    stats: &'a mut RayStats,
+}
+
 impl CoursePath {
-    fn trace(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        depth: u32,
-        budget: &mut u32,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Rgb {
-        if depth > self.max_depth.min(MAX_BRANCHING_DEPTH) || *budget == 0 {
-            return Rgb::BLACK;
+    fn trace(&self, t: &mut Branches, ray: &Ray, depth: u32) -> SampledSpectrum {
+        if depth > self.max_depth.min(MAX_BRANCHING_DEPTH) || *t.budget == 0 {
+            return SampledSpectrum::ZERO;
         }
-        *budget -= 1;
-        let Some(si) = scene.interact(ray, stats) else {
-            return scene.escaped(ray.d.normalize());
+        *t.budget -= 1;
+        let scene = t.scene;
+        let Some(si) = scene.interact(ray, t.stats) else {
+            return scene.escaped(ray.d.normalize(), t.lambda);
         };
-        let emitted = scene.emitted(&si);
+        let emitted = scene.emitted(&si, t.lambda);
         let m = scene.material(&si);
-        let bsdf = m.bsdf(si.shading_frame(), si.uv);
+        let bsdf = m.bsdf(si.shading_frame(), si.uv, t.lambda);
+        let sampler = &mut *t.sampler;
         // The course's roulette: survive with q = max(0.05, 1 − max reflectance).
         let mut scale = 1.0;
         if depth >= self.rr_depth {
@@ -73,13 +85,13 @@ impl CoursePath {
                 return emitted;
             }
         }
-        let mut sum = Rgb::BLACK;
+        let mut sum = SampledSpectrum::ZERO;
         for _ in 0..self.num_of_rays {
-            let u1 = sampler.next_1d();
-            let u2 = sampler.next_2d();
+            let u1 = t.sampler.next_1d();
+            let u2 = t.sampler.next_2d();
             if let Some(bs) = bsdf.sample(si.wo, u1, u2) {
                 let ray = si.spawn_ray(bs.wi);
-                sum += bs.weight * self.trace(scene, &ray, depth + 1, budget, sampler, stats);
+                sum += bs.weight * self.trace(t, &ray, depth + 1);
             }
         }
         emitted + sum * (scale / self.num_of_rays as f32)

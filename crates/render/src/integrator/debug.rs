@@ -5,6 +5,7 @@ use crate::color::Rgb;
 use crate::math::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// White where a ray hits anything, black elsewhere.
@@ -24,41 +25,88 @@ pub struct Normals;
 pub struct Depth;
 
 impl Integrator for OnOff {
-    fn radiance(&self, scene: &Scene, ray: &Ray, _: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        match scene.intersect(ray, stats) {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        _: &mut Wavelengths,
+        _: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        SampledSpectrum::from_rgb(match scene.intersect(ray, stats) {
             Some(_) => Rgb::WHITE,
             None => Rgb::BLACK,
-        }
+        })
+    }
+
+    fn spectral(&self) -> bool {
+        false
     }
 }
 
 impl Integrator for Flat {
-    fn radiance(&self, scene: &Scene, ray: &Ray, _: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        match scene.interact(ray, stats) {
-            Some(si) => scene.material(&si).base_color(si.uv) + scene.emitted(&si),
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        _: &mut Wavelengths,
+        _: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        SampledSpectrum::from_rgb(match scene.interact(ray, stats) {
+            Some(si) => {
+                scene.material(&si).base_color(si.uv)
+                    + scene.emitted(&si, &Wavelengths::Rgb).to_rgb()
+            }
             None => scene.background,
-        }
+        })
+    }
+
+    fn spectral(&self) -> bool {
+        false
     }
 }
 
 impl Integrator for Normals {
-    fn radiance(&self, scene: &Scene, ray: &Ray, _: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        match scene.interact(ray, stats) {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        _: &mut Wavelengths,
+        _: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        SampledSpectrum::from_rgb(match scene.interact(ray, stats) {
             Some(si) => {
                 let n = si.facing_shading_normal();
                 Rgb::new((n.x + 1.0) * 0.5, (n.y + 1.0) * 0.5, (n.z + 1.0) * 0.5)
             }
             None => Rgb::BLACK,
-        }
+        })
+    }
+
+    fn spectral(&self) -> bool {
+        false
     }
 }
 
 impl Integrator for Depth {
-    fn radiance(&self, scene: &Scene, ray: &Ray, _: &mut Sampler, stats: &mut RayStats) -> Rgb {
-        match scene.intersect(ray, stats) {
+    fn radiance(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        _: &mut Wavelengths,
+        _: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        SampledSpectrum::from_rgb(match scene.intersect(ray, stats) {
             Some(h) => Rgb::splat(h.t * ray.d.norm()),
             None => Rgb::BLACK,
-        }
+        })
+    }
+
+    fn spectral(&self) -> bool {
+        false
     }
 }
 
@@ -99,23 +147,53 @@ mod tests {
         let mut sm = Sampler::new(0, 0);
         let hit = Ray::new(Point3::ORIGIN, Vec3::X);
         let miss = Ray::new(Point3::ORIGIN, Vec3::Y);
-        assert_eq!(OnOff.radiance(&s, &hit, &mut sm, &mut st), Rgb::WHITE);
-        assert_eq!(OnOff.radiance(&s, &miss, &mut sm, &mut st), Rgb::BLACK);
         assert_eq!(
-            Flat.radiance(&s, &hit, &mut sm, &mut st),
+            OnOff
+                .radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
+            Rgb::WHITE
+        );
+        assert_eq!(
+            OnOff
+                .radiance(&s, &miss, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
+            Rgb::BLACK
+        );
+        assert_eq!(
+            Flat.radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
             Rgb::new(0.5, 0.25, 1.0)
         );
         assert_eq!(
-            Normals.radiance(&s, &hit, &mut sm, &mut st),
+            Normals
+                .radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
             Rgb::new(0.0, 0.5, 0.5)
         );
-        assert_eq!(Normals.radiance(&s, &miss, &mut sm, &mut st), Rgb::BLACK);
-        assert_eq!(Depth.radiance(&s, &hit, &mut sm, &mut st), Rgb::splat(2.0));
-        assert_eq!(Depth.radiance(&s, &miss, &mut sm, &mut st), Rgb::BLACK);
+        assert_eq!(
+            Normals
+                .radiance(&s, &miss, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
+            Rgb::BLACK
+        );
+        assert_eq!(
+            Depth
+                .radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
+            Rgb::splat(2.0)
+        );
+        assert_eq!(
+            Depth
+                .radiance(&s, &miss, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
+            Rgb::BLACK
+        );
         // From inside the sphere the normal still faces the ray.
         let inside = Ray::new(Point3::new(3.0, 0.0, 0.0), Vec3::Z);
         assert_eq!(
-            Normals.radiance(&s, &inside, &mut sm, &mut st),
+            Normals
+                .radiance(&s, &inside, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
             Rgb::new(0.5, 0.5, 0.0)
         );
     }

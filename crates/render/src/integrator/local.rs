@@ -9,13 +9,13 @@
 //! not light their neighbours under this model.
 
 use super::Integrator;
-use crate::color::Rgb;
 use crate::interaction::SurfaceInteraction;
 use crate::light::{Light, Target};
 use crate::math::{Frame, Ray, Vec3, PI};
 use crate::sampling::sampler::cmj;
 use crate::sampling::{warp, Sampler};
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// Directions per shading point for hemisphere lights.
@@ -33,12 +33,13 @@ impl Integrator for Local {
         &self,
         scene: &Scene,
         ray: &Ray,
+        lambda: &mut Wavelengths,
         sampler: &mut Sampler,
         stats: &mut RayStats,
-    ) -> Rgb {
+    ) -> SampledSpectrum {
         match scene.interact(ray, stats) {
-            Some(si) => shade(scene, &si, self.shadows, sampler, stats),
-            None => scene.escaped(ray.d.normalize()),
+            Some(si) => shade(scene, &si, self.shadows, lambda, sampler, stats),
+            None => scene.escaped(ray.d.normalize(), lambda),
         }
     }
 }
@@ -66,22 +67,23 @@ pub(crate) fn shadow_ray(si: &SurfaceInteraction, wi: Vec3, target: Target) -> R
     }
 }
 
-/// The local model at a surface point, with or without shadow rays.
+/// The local model at a surface point, with or without shadow rays, in the lanes of `lambda`.
 pub fn shade(
     scene: &Scene,
     si: &SurfaceInteraction,
     shadows: bool,
+    lambda: &mut Wavelengths,
     sampler: &mut Sampler,
     stats: &mut RayStats,
-) -> Rgb {
+) -> SampledSpectrum {
     let m = scene.material(si);
     let n = si.facing_shading_normal();
-    let ka = m.ambient(si.uv);
-    let mut l = scene.emitted(si) + scene.ambient * ka;
+    let ka = m.ambient(si.uv, lambda);
+    let mut l = scene.emitted(si, lambda) + lambda.illuminant(scene.ambient) * ka;
     for light in &scene.lights {
         match light {
             Light::Point(..) | Light::Spot(..) | Light::Distant(..) => {
-                let Some(li) = light.local(si.p) else {
+                let Some(li) = light.local(si.p, lambda) else {
                     continue;
                 };
                 l += li.ambient * ka;
@@ -90,14 +92,15 @@ pub fn shade(
                 {
                     continue;
                 }
-                l += m.local(si.uv, n, si.wo, li.wi, li.diffuse, li.specular);
+                l += m.local(si.uv, n, si.wo, li.wi, (li.diffuse, li.specular), lambda);
             }
             Light::Hemisphere(h, c) => {
-                l += c.ambient * ka;
+                l += lambda.illuminant(c.ambient) * ka;
+                let (id, is) = (lambda.illuminant(c.diffuse), lambda.illuminant(c.specular));
                 // ∫ over the lit directions of local(I·dω), by stratified cosine-weighted samples.
                 let frame = Frame::from_normal(n);
                 let pattern = sampler.next_index(u32::MAX);
-                let mut sum = Rgb::BLACK;
+                let mut sum = SampledSpectrum::ZERO;
                 for i in 0..HEMISPHERE_SAMPLES {
                     let wi = frame.to_world(warp::square_to_cosine_hemisphere(cmj(
                         i,
@@ -111,7 +114,7 @@ pub fn shade(
                     {
                         continue;
                     }
-                    sum += m.local(si.uv, n, si.wo, wi, c.diffuse, c.specular) * (PI / cos);
+                    sum += m.local(si.uv, n, si.wo, wi, (id, is), lambda) * (PI / cos);
                 }
                 l += sum / HEMISPHERE_SAMPLES as f32;
             }
@@ -125,6 +128,7 @@ pub fn shade(
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
+    use crate::color::Rgb;
     use crate::light::Emission;
     use crate::light::{Components, Falloff, PointLight};
     use crate::material::Material;
@@ -151,6 +155,7 @@ mod tests {
             PointLight {
                 position: Point3::new(-1.0 - 1.0, 1.0, 0.0),
                 intensity: yellow,
+                spectrum: None,
                 falloff: Falloff::default(),
             },
             Components::from_intensity(yellow),
@@ -160,7 +165,9 @@ mod tests {
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
         let mut sm = Sampler::new(0, 0);
-        let l = Local { shadows: true }.radiance(&scene, &ray, &mut sm, &mut st);
+        let l = Local { shadows: true }
+            .radiance(&scene, &ray, &mut Wavelengths::Rgb, &mut sm, &mut st)
+            .to_rgb();
         let expected = Rgb::new(
             std::f32::consts::FRAC_1_PI * std::f32::consts::FRAC_1_SQRT_2,
             0.0,
@@ -188,6 +195,7 @@ mod tests {
             PointLight {
                 position: Point3::new(-5.0, 0.0, 0.0),
                 intensity: Rgb::WHITE,
+                spectrum: None,
                 falloff: Falloff::default(),
             },
             Components::from_intensity(Rgb::WHITE),
@@ -199,10 +207,14 @@ mod tests {
         );
         let mut st = RayStats::default();
         let mut sm = Sampler::new(0, 0);
-        let lit = Local { shadows: false }.radiance(&scene, &ray, &mut sm, &mut st);
+        let lit = Local { shadows: false }
+            .radiance(&scene, &ray, &mut Wavelengths::Rgb, &mut sm, &mut st)
+            .to_rgb();
         assert!((lit.r - std::f32::consts::FRAC_1_PI).abs() < 1e-5);
         assert_eq!(
-            Local { shadows: true }.radiance(&scene, &ray, &mut sm, &mut st),
+            Local { shadows: true }
+                .radiance(&scene, &ray, &mut Wavelengths::Rgb, &mut sm, &mut st)
+                .to_rgb(),
             Rgb::BLACK
         );
     }

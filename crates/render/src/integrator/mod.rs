@@ -16,40 +16,51 @@ pub use local::{shade, Local};
 pub use path::Path;
 pub use whitted::{Whitted, MAX_WHITTED_DEPTH, WHITTED_RAY_BUDGET};
 
-use crate::color::Rgb;
 use crate::math::Ray;
 use crate::sampling::{SampleCursor, Sampler};
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// Computes the radiance arriving along a camera ray.
 pub trait Integrator: Sync {
-    /// The radiance arriving at the ray's origin from direction `-ray.d`. Implementations draw
-    /// every random number from `sampler` and count the rays they trace in `stats`.
+    /// The radiance arriving at the ray's origin from direction `-ray.d`, in the lanes of
+    /// `lambda` (RGB channels or sampled wavelengths; a dispersive interface may leave only the
+    /// hero wavelength). Implementations draw every random number from `sampler` and count the
+    /// rays they trace in `stats`.
     fn radiance(
         &self,
         scene: &Scene,
         ray: &Ray,
+        lambda: &mut Wavelengths,
         sampler: &mut Sampler,
         stats: &mut RayStats,
-    ) -> Rgb;
+    ) -> SampledSpectrum;
+
+    /// True when the integrator follows radiance per wavelength (spectral mode); false for
+    /// those whose result is a colour by definition (debug views, radiosity).
+    fn spectral(&self) -> bool {
+        true
+    }
 
     /// The radiance along each of `rays` (at most [`crate::math::BATCH`]), samples of one
-    /// pixel: ray i continues the sample at `cursors[i]` (left at its end) and its radiance
-    /// goes to `out[i]`. Each result equals what [`Integrator::radiance`] gives for that ray
-    /// and sample alone; integrators that can trace paths side by side do so.
+    /// pixel: ray i, in the lanes of `lambdas[i]`, continues the sample at `cursors[i]` (left
+    /// at its end) and its radiance goes to `out[i]`. Each result equals what
+    /// [`Integrator::radiance`] gives for that ray and sample alone; integrators that can trace
+    /// paths side by side do so.
     fn radiance_batch(
         &self,
         scene: &Scene,
         rays: &[Ray],
+        lambdas: &mut [Wavelengths],
         cursors: &mut [SampleCursor],
         sampler: &mut Sampler,
         stats: &mut RayStats,
-        out: &mut [Rgb],
+        out: &mut [SampledSpectrum],
     ) {
         for (i, ray) in rays.iter().enumerate() {
             sampler.resume(cursors[i]);
-            out[i] = self.radiance(scene, ray, sampler, stats);
+            out[i] = self.radiance(scene, ray, &mut lambdas[i], sampler, stats);
             cursors[i] = sampler.cursor();
         }
     }

@@ -8,13 +8,13 @@
 //! (The course's branching estimator is [`super::CoursePath`].)
 
 use super::Integrator;
-use crate::color::Rgb;
 use crate::interaction::Hit;
 use crate::math::{Ray, RayBatch, BATCH};
 use crate::sampling::sampler::ONE_MINUS_EPSILON;
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::{SampleCursor, Sampler};
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// The unidirectional path tracer with next-event estimation and MIS.
@@ -42,8 +42,10 @@ impl Default for Path {
 /// along and what multiple importance sampling needs of the vertex it left.
 #[derive(Clone, Copy, Debug)]
 struct PathState {
-    l: Rgb,
-    beta: Rgb,
+    l: SampledSpectrum,
+    beta: SampledSpectrum,
+    /// What the lanes of `l` and `beta` mean.
+    lambda: Wavelengths,
     ray: Ray,
     /// The previous vertex's BSDF density and whether it was a Dirac delta, for MIS.
     prev_pdf: f32,
@@ -54,10 +56,11 @@ struct PathState {
 }
 
 impl PathState {
-    fn new(camera_ray: &Ray) -> Self {
+    fn new(camera_ray: &Ray, lambda: Wavelengths) -> Self {
         Self {
-            l: Rgb::BLACK,
-            beta: Rgb::WHITE,
+            l: SampledSpectrum::ZERO,
+            beta: SampledSpectrum::ONE,
+            lambda,
             ray: *camera_ray,
             prev_pdf: 0.0,
             prev_delta: true,
@@ -71,7 +74,7 @@ impl PathState {
 /// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
 /// ray is unblocked (next-event estimation), and whether the path goes on.
 struct VertexOutcome {
-    shadow: Option<(Ray, Rgb)>,
+    shadow: Option<(Ray, SampledSpectrum)>,
     alive: bool,
 }
 
@@ -101,10 +104,10 @@ impl Path {
             // Lights at infinity, weighted against their own sampling.
             if st.depth > 0 || !self.hide_emitters {
                 let d = st.ray.d.normalize();
-                st.l += st.beta * scene.background;
+                st.l += st.beta * scene.background(&st.lambda);
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
-                    let le = light.escaped(d);
+                    let le = light.escaped(d, &st.lambda);
                     if le.is_black() {
                         continue;
                     }
@@ -122,7 +125,7 @@ impl Path {
 
         // Emission found by BSDF sampling (or by the camera).
         if st.depth > 0 || !self.hide_emitters {
-            let le = scene.emitted(&si);
+            let le = scene.emitted(&si, &st.lambda);
             if !le.is_black() {
                 let w = match si.props.light {
                     Some(li) if !st.prev_delta => {
@@ -139,7 +142,9 @@ impl Path {
             return done;
         }
 
-        let bsdf = scene.material(&si).bsdf(si.shading_frame(), si.uv);
+        let bsdf = scene
+            .material(&si)
+            .bsdf(si.shading_frame(), si.uv, &mut st.lambda);
         // The outgoing direction in the shading frame, shared by every BSDF query below.
         let (wo, flip) = bsdf.local_wo(si.wo);
 
@@ -156,7 +161,7 @@ impl Path {
                 u[0] = (u[0] * n as f32 - pick as f32).min(ONE_MINUS_EPSILON);
             }
             let light = &scene.lights[pick];
-            if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u) {
+            if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u, &st.lambda) {
                 let wi = bsdf.local_wi(ls.wi, flip);
                 let f = bsdf.eval_local(wo, wi);
                 if !f.is_black() {
@@ -229,10 +234,11 @@ impl Integrator for Path {
         &self,
         scene: &Scene,
         camera_ray: &Ray,
+        lambda: &mut Wavelengths,
         sampler: &mut Sampler,
         stats: &mut RayStats,
-    ) -> Rgb {
-        let mut st = PathState::new(camera_ray);
+    ) -> SampledSpectrum {
+        let mut st = PathState::new(camera_ray, *lambda);
         loop {
             let hit = scene.intersect(&st.ray, stats);
             let out = self.vertex(scene, &mut st, hit, sampler);
@@ -242,6 +248,7 @@ impl Integrator for Path {
                 }
             }
             if !out.alive {
+                *lambda = st.lambda;
                 return st.l;
             }
         }
@@ -255,21 +262,22 @@ impl Integrator for Path {
         &self,
         scene: &Scene,
         rays: &[Ray],
+        lambdas: &mut [Wavelengths],
         cursors: &mut [SampleCursor],
         sampler: &mut Sampler,
         stats: &mut RayStats,
-        out: &mut [Rgb],
+        out: &mut [SampledSpectrum],
     ) {
         let n = rays.len();
         debug_assert!(n <= BATCH && cursors.len() == n && out.len() >= n);
-        let mut st =
-            [PathState::new(&Ray::new(crate::math::Point3::ORIGIN, crate::math::Vec3::X)); BATCH];
-        for (s, r) in st.iter_mut().zip(rays) {
-            *s = PathState::new(r);
+        let unused = Ray::new(crate::math::Point3::ORIGIN, crate::math::Vec3::X);
+        let mut st = [PathState::new(&unused, Wavelengths::Rgb); BATCH];
+        for ((s, r), lambda) in st.iter_mut().zip(rays).zip(lambdas.iter()) {
+            *s = PathState::new(r, *lambda);
         }
         let mut alive: u32 = (1u32 << n) - 1;
         let mut hits = [None; BATCH];
-        let mut pending = [Rgb::BLACK; BATCH];
+        let mut pending = [SampledSpectrum::ZERO; BATCH];
         // Only the active lanes are read: the batches are filled, not cleared, at each step.
         let mut batch = RayBatch::default();
         let mut shadows = RayBatch::default();
@@ -301,6 +309,7 @@ impl Integrator for Path {
         }
         for i in 0..n {
             out[i] = st[i].l;
+            lambdas[i] = st[i].lambda;
         }
     }
 }

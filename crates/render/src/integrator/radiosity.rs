@@ -4,11 +4,11 @@
 //! [`Radiosity`] solution an [`Integrator`].
 
 use super::Integrator;
-use crate::color::Rgb;
 use crate::math::Ray;
 use crate::radiosity::{Radiosity, RadiosityOptions, RadiosityOutcome};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// Solves `scene` (or loads `opts.cache` when it matches): the integrator, and what the solve
@@ -28,9 +28,15 @@ impl Integrator for Radiosity {
         &self,
         scene: &Scene,
         ray: &Ray,
+        _: &mut Wavelengths,
         sampler: &mut Sampler,
         stats: &mut RayStats,
-    ) -> Rgb {
-        Radiosity::radiance(self, scene, ray, sampler, stats)
+    ) -> SampledSpectrum {
+        SampledSpectrum::from_rgb(Radiosity::radiance(self, scene, ray, sampler, stats))
+    }
+
+    /// The solution is a colour per patch.
+    fn spectral(&self) -> bool {
+        false
     }
 }

@@ -12,11 +12,11 @@ pub const WHITTED_RAY_BUDGET: u32 = 4096;
 
 use super::local::shade;
 use super::Integrator;
-use crate::color::Rgb;
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
 use crate::math::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// Recursive ray tracing.
@@ -31,34 +31,47 @@ impl Integrator for Whitted {
         &self,
         scene: &Scene,
         ray: &Ray,
+        lambda: &mut Wavelengths,
         sampler: &mut Sampler,
         stats: &mut RayStats,
-    ) -> Rgb {
+    ) -> SampledSpectrum {
         let mut budget = WHITTED_RAY_BUDGET;
-        self.trace(scene, ray, 0, &mut budget, sampler, stats)
+        let mut t = Tracer {
+            scene,
+            lambda,
+            budget: &mut budget,
+            sampler,
+            stats,
+        };
+        self.trace(&mut t, ray, 0)
     }
 }
 
+/// What the recursion shares: the scene, the path's wavelengths (a dispersive interface anywhere
+/// in the tree keeps only the hero), the ray budget, the sampler and the counters.
+struct Tracer<'a> {
+    scene: &'a Scene,
+    lambda: &'a mut Wavelengths,
+    budget: &'a mut u32,
+    sampler: &'a mut Sampler,
+    stats: &'a mut RayStats,
+}
+
 impl Whitted {
-    fn trace(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        depth: u32,
-        budget: &mut u32,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> Rgb {
-        let Some(si) = scene.interact(ray, stats) else {
-            return scene.escaped(ray.d.normalize());
+    fn trace(&self, t: &mut Tracer, ray: &Ray, depth: u32) -> SampledSpectrum {
+        let scene = t.scene;
+        let Some(si) = scene.interact(ray, t.stats) else {
+            return scene.escaped(ray.d.normalize(), t.lambda);
         };
-        let mut l = shade(scene, &si, true, sampler, stats);
-        if depth >= self.max_depth.min(MAX_WHITTED_DEPTH) || *budget < 2 {
+        let mut l = shade(scene, &si, true, t.lambda, t.sampler, t.stats);
+        if depth >= self.max_depth.min(MAX_WHITTED_DEPTH) || *t.budget < 2 {
             return l;
         }
         // Both children are paid for up front, so that a refraction is never cut alone.
-        *budget -= 2;
-        let w = scene.material(&si).whitted(si.uv, si.ns.dot_vec(si.wo));
+        *t.budget -= 2;
+        let w = scene
+            .material(&si)
+            .whitted(si.uv, si.ns.dot_vec(si.wo), t.lambda);
         let wo = si.wo;
         match w.refract {
             Some((eta, kt)) => {
@@ -68,19 +81,16 @@ impl Whitted {
                 let (f, cos_t, _, eta_ti) = fresnel_dielectric(cos_i, eta);
                 let nf = if cos_i >= 0.0 { n } else { -n };
                 let r = reflect(wo, nf);
-                l += w.reflect
-                    * f
-                    * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
+                l += w.reflect * f * self.trace(t, &si.spawn_ray(r), depth + 1);
                 if f < 1.0 {
-                    let t = refract(wo, n, cos_t, eta_ti);
-                    let lt = self.trace(scene, &si.spawn_ray(t), depth + 1, budget, sampler, stats);
+                    let d = refract(wo, n, cos_t, eta_ti);
+                    let lt = self.trace(t, &si.spawn_ray(d), depth + 1);
                     l += kt * lt * ((1.0 - f) * eta_ti * eta_ti);
                 }
             }
             None if !w.reflect.is_black() => {
                 let r = reflect(wo, si.facing_shading_normal().to_vec());
-                l += w.reflect
-                    * self.trace(scene, &si.spawn_ray(r), depth + 1, budget, sampler, stats);
+                l += w.reflect * self.trace(t, &si.spawn_ray(r), depth + 1);
             }
             None => {}
         }
@@ -92,6 +102,7 @@ impl Whitted {
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
+    use crate::color::Rgb;
     use crate::light::Emission;
     use crate::material::{Material, Model};
     use crate::math::{Point3, Transform, Vec3};
@@ -127,10 +138,26 @@ mod tests {
         let w = Whitted { max_depth: 10 };
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
-        let l = w.radiance(&scene, &ray, &mut Sampler::new(0, 0), &mut st);
+        let l = w
+            .radiance(
+                &scene,
+                &ray,
+                &mut Wavelengths::Rgb,
+                &mut Sampler::new(0, 0),
+                &mut st,
+            )
+            .to_rgb();
         assert!(l.approx_eq(Rgb::splat(0.5), 1e-6), "{l:?}");
         assert_eq!(
-            Whitted { max_depth: 0 }.radiance(&scene, &ray, &mut Sampler::new(0, 0), &mut st),
+            Whitted { max_depth: 0 }
+                .radiance(
+                    &scene,
+                    &ray,
+                    &mut Wavelengths::Rgb,
+                    &mut Sampler::new(0, 0),
+                    &mut st
+                )
+                .to_rgb(),
             Rgb::BLACK
         );
     }
@@ -142,6 +169,7 @@ mod tests {
     fn glass_energy_bookkeeping() {
         let mut b = SceneBuilder::new();
         let glass = b.add_material(Material::two_sided(Model::Dielectric {
+            dispersion: None,
             eta: 1.5,
             reflectance: Texture::Uniform(Rgb::WHITE),
             transmittance: Texture::Uniform(Rgb::WHITE),
@@ -170,10 +198,26 @@ mod tests {
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
         // Depth 2: in and out, no internal bounces followed beyond the limit.
-        let l = Whitted { max_depth: 2 }.radiance(&scene, &ray, &mut Sampler::new(0, 0), &mut st);
+        let l = Whitted { max_depth: 2 }
+            .radiance(
+                &scene,
+                &ray,
+                &mut Wavelengths::Rgb,
+                &mut Sampler::new(0, 0),
+                &mut st,
+            )
+            .to_rgb();
         assert!((l.r - 0.96 * 0.96).abs() < 1e-4, "{l:?}");
         // With many bounces the internal reflections add Σ (1−F)² F^(2k).
-        let l = Whitted { max_depth: 30 }.radiance(&scene, &ray, &mut Sampler::new(0, 0), &mut st);
+        let l = Whitted { max_depth: 30 }
+            .radiance(
+                &scene,
+                &ray,
+                &mut Wavelengths::Rgb,
+                &mut Sampler::new(0, 0),
+                &mut st,
+            )
+            .to_rgb();
         let expected = 0.96f32 * 0.96 / (1.0 - 0.04 * 0.04);
         assert!((l.r - expected).abs() < 1e-4, "{l:?} vs {expected}");
     }

@@ -13,6 +13,7 @@ use crate::geometry::Geometry;
 use crate::math::{Normal3, Point3, Vec3, PI};
 use crate::sampling::{warp, Distribution1D};
 use crate::shape::{Cube, Disk, LocalGeometry, Mesh, Parallelogram, Sphere};
+use crate::spectrum::Wavelengths;
 
 /// The sampleable shape of an area light.
 #[derive(Clone, Debug, PartialEq)]
@@ -187,12 +188,13 @@ impl AreaLight {
         emissions: &[Emission],
         p: Point3,
         u: [f32; 2],
+        lambda: &Wavelengths,
     ) -> Option<LightSample> {
         let emission = &emissions[self.emission as usize];
         // Parallelograms (the usual area light) on a straight path of their own, so that the
         // sampled point stays in registers.
         if let AreaShape::Parallelogram(q) = &self.shape {
-            return area_sample(emission, p, q.geometry(u[0], u[1]), self.inv_area);
+            return area_sample(emission, p, q.geometry(u[0], u[1]), self.inv_area, lambda);
         }
         if let AreaShape::Sphere {
             sphere,
@@ -217,7 +219,7 @@ impl AreaLight {
                 };
                 let q = sphere.world_from_object.inv_point(ray.at(t)).to_vec();
                 let g = sphere.geometry_at(q / q.norm());
-                let li = emission.radiance_at(g.uv, g.n, -wi);
+                let li = emission.radiance_at(g.uv, g.n, -wi, lambda);
                 return Some(LightSample {
                     wi,
                     li,
@@ -228,7 +230,7 @@ impl AreaLight {
             }
         }
         let (g, pdf_area) = self.sample_area(geometry, u)?;
-        area_sample(emission, p, g, pdf_area)
+        area_sample(emission, p, g, pdf_area, lambda)
     }
 
     /// The solid-angle density with which [`AreaLight::sample`] picks the point `q` (normal `n`)
@@ -274,6 +276,7 @@ fn area_sample(
     p: Point3,
     g: LocalGeometry,
     pdf_area: f32,
+    lambda: &Wavelengths,
 ) -> Option<LightSample> {
     let to = g.p - p;
     let d2 = to.squared_norm();
@@ -287,7 +290,7 @@ fn area_sample(
     }
     Some(LightSample {
         wi,
-        li: emission.radiance_at(g.uv, g.n, -wi),
+        li: emission.radiance_at(g.uv, g.n, -wi, lambda),
         pdf: pdf_area * d2 / cos,
         delta: false,
         target: Target::Surface(g.p, g.n),

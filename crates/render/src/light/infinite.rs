@@ -13,6 +13,7 @@ use crate::color::Rgb;
 use crate::math::{Point2, Transform, Vec3, INV_2PI, INV_PI, PI};
 use crate::sampling::warp;
 use crate::sampling::Distribution2D;
+use crate::spectrum::{RgbRole, SampledSpectrum, Wavelengths};
 use crate::texture::Texture;
 
 /// A light from every direction (an environment map, or a constant colour).
@@ -75,18 +76,24 @@ impl Environment {
         (self.world_from_env.vector(l).normalize(), st)
     }
 
-    /// Radiance arriving from direction `d` (pointing away from the scene).
+    /// Radiance arriving from direction `d` (pointing away from the scene), in the lanes of
+    /// `lambda`.
     #[inline]
-    pub fn radiance(&self, d: Vec3) -> Rgb {
+    pub fn radiance(&self, d: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
         // A constant sky needs no coordinates (atan2 and acos per escaped ray).
-        if let Texture::Uniform(c) = &self.radiance {
-            return *c;
-        }
-        self.radiance.eval(self.uv(d))
+        let uv = match &self.radiance {
+            Texture::Uniform(_) | Texture::Spectral { .. } => Point2::new(0.5, 0.5),
+            _ => self.uv(d),
+        };
+        self.radiance.spectral(uv, lambda, RgbRole::Emission)
     }
 
     /// A direction sampled in proportion to the map, its radiance and solid-angle density.
-    pub fn sample(&self, u: [f32; 2]) -> Option<(Vec3, Rgb, f32)> {
+    pub fn sample(
+        &self,
+        u: [f32; 2],
+        lambda: &Wavelengths,
+    ) -> Option<(Vec3, SampledSpectrum, f32)> {
         match &self.distribution {
             Some(dist) => {
                 let (uv, pdf_uv) = dist.sample(u);
@@ -96,14 +103,14 @@ impl Environment {
                 }
                 let pdf = pdf_uv / (2.0 * PI * PI * st);
                 // The Jacobian of the world transform keeps solid angle for rotations.
-                Some((d, self.radiance(d), pdf))
+                Some((d, self.radiance(d, lambda), pdf))
             }
             None => {
                 let d = self
                     .world_from_env
                     .vector(warp::square_to_uniform_sphere(u))
                     .normalize();
-                Some((d, self.radiance(d), warp::uniform_sphere_pdf()))
+                Some((d, self.radiance(d, lambda), warp::uniform_sphere_pdf()))
             }
         }
     }
@@ -211,7 +218,9 @@ mod tests {
             integral / n as f64
         );
         for _ in 0..100 {
-            let (d, _, pdf) = e.sample([rng.next_f32(), rng.next_f32()]).unwrap();
+            let (d, _, pdf) = e
+                .sample([rng.next_f32(), rng.next_f32()], &Wavelengths::Rgb)
+                .unwrap();
             assert!((pdf - e.pdf(d)).abs() < 1e-3 * pdf);
         }
     }

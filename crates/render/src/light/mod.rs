@@ -22,6 +22,8 @@ pub use point::{Falloff, PointLight, SpotLight, SpotPattern, SpotProfile};
 use crate::color::Rgb;
 use crate::geometry::Geometry;
 use crate::math::{Normal3, Point3, Vec3};
+use crate::spectrum::{SampledSpectrum, Spectrum, Wavelengths};
+use std::sync::Arc;
 
 /// The lecture's separate ambient, diffuse and specular intensities of a light.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,12 +48,24 @@ impl Components {
 }
 
 /// Parallel light travelling along `direction`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct DistantLight {
     /// Unit direction of travel.
     pub direction: Vec3,
-    /// Irradiance on a surface facing the light.
+    /// Irradiance on a surface facing the light (in RGB mode, and the colour upsampled in
+    /// spectral mode when no `spectrum`).
     pub irradiance: Rgb,
+    /// The irradiance's spectrum, used in spectral mode (`irradiance` is its RGB conversion).
+    pub spectrum: Option<Arc<Spectrum>>,
+}
+
+/// An emitted colour `rgb` with its spectrum, if any, in the lanes of `lambda`.
+#[inline]
+fn emitted(rgb: Rgb, spectrum: &Option<Arc<Spectrum>>, lambda: &Wavelengths) -> SampledSpectrum {
+    match spectrum {
+        Some(s) => lambda.spectrum(s, rgb),
+        None => lambda.illuminant(rgb),
+    }
 }
 
 /// The closed set of lights.
@@ -87,8 +101,9 @@ pub enum Target {
 pub struct LightSample {
     /// Unit direction from the point to the light.
     pub wi: Vec3,
-    /// Radiance arriving along `wi` (for delta lights: intensity × fall-off, or irradiance).
-    pub li: Rgb,
+    /// Radiance arriving along `wi` (for delta lights: intensity × fall-off, or irradiance), in
+    /// the lanes of the path's wavelengths.
+    pub li: SampledSpectrum,
     /// Density per unit solid angle (1 for delta lights).
     pub pdf: f32,
     /// The light is a Dirac delta (point, spot, distant): no MIS.
@@ -113,11 +128,11 @@ pub struct LocalIllumination {
     /// Where a shadow ray must go.
     pub target: Target,
     /// I_a (fall-off applied).
-    pub ambient: Rgb,
+    pub ambient: SampledSpectrum,
     /// I_d (fall-off applied).
-    pub diffuse: Rgb,
+    pub diffuse: SampledSpectrum,
     /// I_s (fall-off applied).
-    pub specular: Rgb,
+    pub specular: SampledSpectrum,
 }
 
 impl Light {
@@ -127,8 +142,9 @@ impl Light {
     }
 
     /// The local model's illumination at `p` from a point, spot or distant light (`None` for
-    /// other lights, or outside a spot's cone).
-    pub fn local(&self, p: Point3) -> Option<LocalIllumination> {
+    /// other lights, or outside a spot's cone), in the lanes of `lambda` (the intensities'
+    /// colours upsampled as emitters in spectral mode).
+    pub fn local(&self, p: Point3, lambda: &Wavelengths) -> Option<LocalIllumination> {
         let (wi, target, scale, c) = match self {
             Light::Point(l, c) => {
                 let to = l.position - p;
@@ -152,9 +168,9 @@ impl Light {
         (scale > 0.0 && wi.is_finite()).then_some(LocalIllumination {
             wi,
             target,
-            ambient: c.ambient * scale,
-            diffuse: c.diffuse * scale,
-            specular: c.specular * scale,
+            ambient: lambda.illuminant(c.ambient) * scale,
+            diffuse: lambda.illuminant(c.diffuse) * scale,
+            specular: lambda.illuminant(c.specular) * scale,
         })
     }
 
@@ -165,11 +181,12 @@ impl Light {
         emissions: &[Emission],
         p: Point3,
         u: [f32; 2],
+        lambda: &Wavelengths,
     ) -> Option<LightSample> {
         // Area lights first, on a path of their own (no merge with the other lights' samples).
         if let Light::Area(a) = self {
             return a
-                .sample(geometry, emissions, p, u)
+                .sample(geometry, emissions, p, u, lambda)
                 .filter(LightSample::usable);
         }
         let s = match self {
@@ -178,7 +195,7 @@ impl Light {
                 let d = to.norm();
                 LightSample {
                     wi: to / d,
-                    li: l.intensity * l.falloff.scale(d),
+                    li: emitted(l.intensity, &l.spectrum, lambda) * l.falloff.scale(d),
                     pdf: 1.0,
                     delta: true,
                     target: Target::Point(l.position),
@@ -190,7 +207,9 @@ impl Light {
                 let wi = to / d;
                 LightSample {
                     wi,
-                    li: l.intensity * l.pattern(-wi) * (l.falloff.scale(d) * l.profile(-wi)),
+                    li: emitted(l.intensity, &l.spectrum, lambda)
+                        * l.pattern(-wi, lambda)
+                        * (l.falloff.scale(d) * l.profile(-wi)),
                     pdf: 1.0,
                     delta: true,
                     target: Target::Point(l.position),
@@ -198,7 +217,7 @@ impl Light {
             }
             Light::Distant(l, _) => LightSample {
                 wi: -l.direction,
-                li: l.irradiance,
+                li: emitted(l.irradiance, &l.spectrum, lambda),
                 pdf: 1.0,
                 delta: true,
                 target: Target::Infinite,
@@ -207,14 +226,14 @@ impl Light {
                 let (wi, pdf) = h.sample(u);
                 LightSample {
                     wi,
-                    li: h.radiance,
+                    li: lambda.illuminant(h.radiance),
                     pdf,
                     delta: false,
                     target: Target::Infinite,
                 }
             }
             Light::Environment(e) => {
-                let (wi, li, pdf) = e.sample(u)?;
+                let (wi, li, pdf) = e.sample(u, lambda)?;
                 LightSample {
                     wi,
                     li,
@@ -223,7 +242,7 @@ impl Light {
                     target: Target::Infinite,
                 }
             }
-            Light::Area(a) => a.sample(geometry, emissions, p, u)?,
+            Light::Area(a) => a.sample(geometry, emissions, p, u, lambda)?,
         };
         s.usable().then_some(s)
     }
@@ -238,12 +257,12 @@ impl Light {
     }
 
     /// Radiance reaching the scene from direction `d` (pointing away from the scene) for
-    /// lights at infinity, black for the others.
-    pub fn escaped(&self, d: Vec3) -> Rgb {
+    /// lights at infinity, black for the others; in the lanes of `lambda`.
+    pub fn escaped(&self, d: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
         match self {
-            Light::Environment(e) => e.radiance(d),
-            Light::Hemisphere(h, _) => h.radiance(d),
-            _ => Rgb::BLACK,
+            Light::Environment(e) => e.radiance(d, lambda),
+            Light::Hemisphere(h, _) => lambda.illuminant(h.radiance(d)),
+            _ => SampledSpectrum::ZERO,
         }
     }
 

@@ -13,7 +13,9 @@
 
 use crate::color::Rgb;
 use crate::math::{Point2, Point3, Vec3};
+use crate::spectrum::{RgbRole, SampledSpectrum, Spectrum, Wavelengths};
 use crate::texture::Texture;
+use std::sync::Arc;
 
 /// How a light's contribution decreases with distance.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -58,12 +60,14 @@ pub enum SpotProfile {
 }
 
 /// A point light.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PointLight {
     /// Position.
     pub position: Point3,
-    /// Intensity.
+    /// Intensity (in RGB mode, and the colour upsampled in spectral mode when no `spectrum`).
     pub intensity: Rgb,
+    /// The intensity's spectrum, used in spectral mode (`intensity` is its RGB conversion).
+    pub spectrum: Option<Arc<Spectrum>>,
     /// Distance fall-off.
     pub falloff: Falloff,
 }
@@ -90,8 +94,11 @@ pub struct SpotLight {
     pub position: Point3,
     /// Unit axis of the cone (the direction the light shines to).
     pub axis: Vec3,
-    /// Intensity on the axis.
+    /// Intensity on the axis (in RGB mode, and the colour upsampled in spectral mode when no
+    /// `spectrum`).
     pub intensity: Rgb,
+    /// The intensity's spectrum, used in spectral mode (`intensity` is its RGB conversion).
+    pub spectrum: Option<Arc<Spectrum>>,
     /// cos of the cut-off angle.
     pub cos_cutoff: f32,
     /// The profile inside the cone.
@@ -106,16 +113,16 @@ impl SpotLight {
     /// The projected texture's colour along the unit direction `w` leaving the light (white
     /// without a texture).
     #[inline]
-    pub fn pattern(&self, w: Vec3) -> Rgb {
+    pub fn pattern(&self, w: Vec3, lambda: &Wavelengths) -> SampledSpectrum {
         let Some(p) = &self.pattern else {
-            return Rgb::WHITE;
+            return SampledSpectrum::ONE;
         };
         let z = w.dot(self.axis) * p.uv_factor;
         if !(z > 0.0) {
-            return Rgb::BLACK;
+            return SampledSpectrum::ZERO;
         }
         let uv = Point2::new(0.5 + 0.5 * w.dot(p.x) / z, 0.5 + 0.5 * w.dot(p.y) / z);
-        p.texture.eval(uv)
+        p.texture.spectral(uv, lambda, RgbRole::Reflectance)
     }
 
     /// The angular factor for the unit direction `w` leaving the light.
@@ -175,6 +182,7 @@ mod tests {
             position: Point3::ORIGIN,
             axis: Vec3::Z,
             intensity: Rgb::WHITE,
+            spectrum: None,
             cos_cutoff: 30f32.to_radians().cos(),
             profile: SpotProfile::Power(2.0),
             pattern: None,

@@ -8,38 +8,38 @@ use super::phong::PhongBrdf;
 use super::plastic::{Plastic, RoughPlastic};
 use super::sample::{BsdfSample, LocalSample};
 use super::{conductor, dielectric, lambert, specular};
-use crate::color::Rgb;
 use crate::math::{Frame, Vec3};
+use crate::spectrum::SampledSpectrum;
 
 /// A material's scattering at one point, textures resolved.
 #[derive(Clone, Copy, Debug)]
 pub enum BsdfModel<'a> {
     /// Lambert.
-    Lambert(Rgb),
+    Lambert(SampledSpectrum),
     /// Perfect mirror or smooth conductor.
     Mirror {
         /// Reflectance.
-        r: Rgb,
+        r: SampledSpectrum,
         /// Conductor index, or `None` for F = 1.
-        eta_k: Option<(Rgb, Rgb)>,
+        eta_k: Option<(SampledSpectrum, SampledSpectrum)>,
     },
     /// Rough conductor.
     RoughConductor {
         /// Distribution.
         mf: Microfacet,
         /// Conductor index.
-        eta_k: Option<(Rgb, Rgb)>,
+        eta_k: Option<(SampledSpectrum, SampledSpectrum)>,
         /// Reflectance.
-        r: Rgb,
+        r: SampledSpectrum,
     },
     /// Smooth dielectric.
     Dielectric {
         /// Relative index.
         eta: f32,
         /// Reflection scale.
-        r: Rgb,
+        r: SampledSpectrum,
         /// Transmission scale.
-        t: Rgb,
+        t: SampledSpectrum,
     },
     /// Rough dielectric.
     RoughDielectric {
@@ -48,9 +48,9 @@ pub enum BsdfModel<'a> {
         /// Relative index.
         eta: f32,
         /// Reflection scale.
-        r: Rgb,
+        r: SampledSpectrum,
         /// Transmission scale.
-        t: Rgb,
+        t: SampledSpectrum,
     },
     /// Smooth plastic.
     Plastic(Plastic),
@@ -106,14 +106,14 @@ impl Bsdf<'_> {
     }
 
     /// f(wo, wi)·|cos θi| (world directions, unit).
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         let (o, i, _) = self.local(wo, wi);
         self.eval_local(o, i)
     }
 
     /// [`Bsdf::eval`] for directions from [`Bsdf::local_wo`] and [`Bsdf::local_wi`].
     #[inline(always)]
-    pub fn eval_local(&self, o: Vec3, i: Vec3) -> Rgb {
+    pub fn eval_local(&self, o: Vec3, i: Vec3) -> SampledSpectrum {
         // Lambert, the common case, without a call.
         if let BsdfModel::Lambert(r) = &self.model {
             return lambert::eval(*r, o, i);
@@ -123,10 +123,10 @@ impl Bsdf<'_> {
 
     /// [`Bsdf::eval_local`] for every model.
     #[inline(never)]
-    fn eval_general(&self, o: Vec3, i: Vec3) -> Rgb {
+    fn eval_general(&self, o: Vec3, i: Vec3) -> SampledSpectrum {
         match &self.model {
             BsdfModel::Lambert(r) => lambert::eval(*r, o, i),
-            BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => Rgb::BLACK,
+            BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. } => SampledSpectrum::ZERO,
             BsdfModel::RoughConductor { mf, eta_k, r } => conductor::eval(mf, *eta_k, *r, o, i),
             BsdfModel::RoughDielectric { mf, eta, r, t } => {
                 dielectric::eval_rough(mf, *eta, *r, *t, o, i)

@@ -6,15 +6,18 @@
 use super::fresnel::{fresnel_conductor, reflect};
 use super::microfacet::Microfacet;
 use super::sample::{reflection_sample, LocalSample};
-use crate::color::Rgb;
 use crate::math::Vec3;
+use crate::spectrum::SampledSpectrum;
 
 /// The Fresnel term of a conductor, or 1 for the ideal (`material="none"`) one.
 #[inline]
-pub fn conductor_fresnel(c: Option<(Rgb, Rgb)>, cos: f32) -> Rgb {
+pub fn conductor_fresnel(
+    c: Option<(SampledSpectrum, SampledSpectrum)>,
+    cos: f32,
+) -> SampledSpectrum {
     match c {
         Some((eta, k)) => fresnel_conductor(cos, eta, k),
-        None => Rgb::WHITE,
+        None => SampledSpectrum::ONE,
     }
 }
 
@@ -45,18 +48,24 @@ pub fn microfacet_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> f32 {
 }
 
 /// f·cos θi.
-pub fn eval(mf: &Microfacet, c: Option<(Rgb, Rgb)>, r: Rgb, wo: Vec3, wi: Vec3) -> Rgb {
+pub fn eval(
+    mf: &Microfacet,
+    c: Option<(SampledSpectrum, SampledSpectrum)>,
+    r: SampledSpectrum,
+    wo: Vec3,
+    wi: Vec3,
+) -> SampledSpectrum {
     match microfacet_lobe(mf, wo, wi) {
         Some((v, h)) => r * conductor_fresnel(c, wo.dot(h)) * v,
-        None => Rgb::BLACK,
+        None => SampledSpectrum::ZERO,
     }
 }
 
 /// Samples a microfacet normal and reflects about it.
 pub fn sample(
     mf: &Microfacet,
-    c: Option<(Rgb, Rgb)>,
-    r: Rgb,
+    c: Option<(SampledSpectrum, SampledSpectrum)>,
+    r: SampledSpectrum,
     wo: Vec3,
     u: [f32; 2],
 ) -> Option<LocalSample> {

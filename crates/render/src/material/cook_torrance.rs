@@ -13,17 +13,17 @@ use super::conductor::{microfacet_lobe, microfacet_pdf};
 use super::fresnel::{fresnel_dielectric, reflect};
 use super::microfacet::Microfacet;
 use super::sample::{reflection_sample, specular_probability, LocalSample};
-use crate::color::Rgb;
 use crate::math::{Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectrum::SampledSpectrum;
 
 /// A Cook–Torrance BRDF at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CookTorrance {
     /// Diffuse coefficient.
-    pub kd: Rgb,
+    pub kd: SampledSpectrum,
     /// Specular coefficient.
-    pub ks: Rgb,
+    pub ks: SampledSpectrum,
     /// The microfacet distribution.
     pub mf: Microfacet,
     /// Index of refraction of the Fresnel term.
@@ -44,9 +44,9 @@ impl CookTorrance {
     }
 
     /// f·cos θi.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Rgb::BLACK;
+            return SampledSpectrum::ZERO;
         }
         self.kd * (INV_PI * wi.z) + self.ks * self.specular(wo, wi)
     }
@@ -74,9 +74,15 @@ impl CookTorrance {
     }
 
     /// The local model for one light: I_d·k_d·(n·l) + I_s·k_s·D·G·F/(4 cos θo cos θi)·(n·l).
-    pub fn local(&self, wo: Vec3, wi: Vec3, id: Rgb, is: Rgb) -> Rgb {
+    pub fn local(
+        &self,
+        wo: Vec3,
+        wi: Vec3,
+        id: SampledSpectrum,
+        is: SampledSpectrum,
+    ) -> SampledSpectrum {
         if wi.z <= 0.0 || wo.z <= 0.0 {
-            return Rgb::BLACK;
+            return SampledSpectrum::ZERO;
         }
         id * self.kd * wi.z + is * self.ks * self.specular(wo, wi)
     }

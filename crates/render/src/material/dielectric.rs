@@ -11,12 +11,46 @@
 use super::fresnel::{fresnel_dielectric, reflect, reflect_z, refract, refract_z};
 use super::microfacet::Microfacet;
 use super::sample::LocalSample;
-use crate::color::Rgb;
 use crate::math::Vec3;
+use crate::spectrum::{Ior, SampledSpectrum, Wavelengths};
+
+/// A dielectric whose index varies with the wavelength (a candela extension of Mitsuba's
+/// `int_ior`): the relative index at λ is `interior(λ) / exterior`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dispersion {
+    /// The interior's index as a function of the wavelength.
+    pub interior: Ior,
+    /// The exterior's index.
+    pub exterior: f32,
+}
+
+/// The wavelength at which a dispersive glass's index stands for the whole spectrum in RGB mode:
+/// the sodium D line, where glasses' catalogue indices n_d are given.
+pub const REFERENCE_WAVELENGTH: f32 = 587.56;
+
+/// The relative index a path sees: `eta`, or, for a dispersive glass on a spectral path, the
+/// index at the hero wavelength — and then the path keeps only its hero wavelength (the others
+/// would refract elsewhere; pbrt-v4's `TerminateSecondary`).
+#[inline]
+pub fn relative_eta(eta: f32, dispersion: Option<&Dispersion>, w: &mut Wavelengths) -> f32 {
+    match (dispersion, w.hero()) {
+        (Some(d), Some(lambda)) if d.interior.is_dispersive() => {
+            w.terminate_secondary();
+            d.interior.eval(lambda) / d.exterior
+        }
+        _ => eta,
+    }
+}
 
 /// Samples the smooth interface: reflection with probability F, else refraction.
 #[inline]
-pub fn sample_smooth(eta: f32, r: Rgb, t: Rgb, wo: Vec3, u: f32) -> Option<LocalSample> {
+pub fn sample_smooth(
+    eta: f32,
+    r: SampledSpectrum,
+    t: SampledSpectrum,
+    wo: Vec3,
+    u: f32,
+) -> Option<LocalSample> {
     let (f, cos_t, _, eta_ti) = fresnel_dielectric(wo.z, eta);
     if u < f {
         Some(LocalSample {
@@ -57,9 +91,16 @@ fn half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, bool, f32)> {
 }
 
 /// f·|cos θi| of the rough interface.
-pub fn eval_rough(mf: &Microfacet, eta: f32, r: Rgb, t: Rgb, wo: Vec3, wi: Vec3) -> Rgb {
+pub fn eval_rough(
+    mf: &Microfacet,
+    eta: f32,
+    r: SampledSpectrum,
+    t: SampledSpectrum,
+    wo: Vec3,
+    wi: Vec3,
+) -> SampledSpectrum {
     let Some((m, reflection, eta_p)) = half_vector(eta, wo, wi) else {
-        return Rgb::BLACK;
+        return SampledSpectrum::ZERO;
     };
     let d = mf.d(m);
     let (f, ..) = fresnel_dielectric(wo.dot(m), eta);
@@ -67,7 +108,7 @@ pub fn eval_rough(mf: &Microfacet, eta: f32, r: Rgb, t: Rgb, wo: Vec3, wi: Vec3)
     let (om, im) = (wo.dot(m), wi.dot(m));
     // Both directions must see m from the side their hemisphere says.
     if om * wo.z <= 0.0 || im * wi.z <= 0.0 {
-        return Rgb::BLACK;
+        return SampledSpectrum::ZERO;
     }
     if reflection {
         r * (f * d * g / (4.0 * wo.z.abs()))
@@ -102,8 +143,8 @@ pub fn pdf_rough(mf: &Microfacet, eta: f32, wo: Vec3, wi: Vec3) -> f32 {
 pub fn sample_rough(
     mf: &Microfacet,
     eta: f32,
-    r: Rgb,
-    t: Rgb,
+    r: SampledSpectrum,
+    t: SampledSpectrum,
     wo: Vec3,
     u1: f32,
     u2: [f32; 2],

@@ -1,7 +1,7 @@
 //! Fresnel equations for dielectric and conductor interfaces.
 
-use crate::color::Rgb;
 use crate::math::{safe_sqrt, Vec3};
+use crate::spectrum::SampledSpectrum;
 
 /// Fresnel reflectance at a dielectric interface for unpolarised light.
 ///
@@ -39,7 +39,7 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 
 /// Fresnel reflectance of a conductor with complex relative index `eta + i·k` for light arriving
 /// from outside at cosine `cos_i` ≥ 0 (per channel).
-pub fn fresnel_conductor(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
+pub fn fresnel_conductor(cos_i: f32, eta: SampledSpectrum, k: SampledSpectrum) -> SampledSpectrum {
     let one = |eta: f32, k: f32| -> f32 {
         let c2 = cos_i * cos_i;
         let s2 = 1.0 - c2;
@@ -55,7 +55,7 @@ pub fn fresnel_conductor(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
         let rp = rs * (term3 - term4) / (term3 + term4);
         0.5 * (rs + rp)
     };
-    Rgb::new(one(eta.r, k.r), one(eta.g, k.g), one(eta.b, k.b))
+    eta.zip(k, one)
 }
 
 /// The hemispherical average of the dielectric Fresnel reflectance ("Fdr"): the fraction of
@@ -136,11 +136,19 @@ mod tests {
     #[test]
     fn conductors_match_known_values() {
         // A conductor with k = 0 is a dielectric seen from outside.
-        let f = fresnel_conductor(0.7, Rgb::splat(1.5), Rgb::splat(0.0));
-        assert!((f.r - fresnel_dielectric(0.7, 1.5).0).abs() < 1e-5);
+        let f = fresnel_conductor(
+            0.7,
+            SampledSpectrum::splat(1.5),
+            SampledSpectrum::splat(0.0),
+        );
+        assert!((f[0] - fresnel_dielectric(0.7, 1.5).0).abs() < 1e-5);
         // Normal incidence: ((η−1)² + k²)/((η+1)² + k²).
-        let f = fresnel_conductor(1.0, Rgb::splat(0.2), Rgb::splat(3.0));
-        assert!((f.g - (0.64 + 9.0) / (1.44 + 9.0)).abs() < 1e-5);
+        let f = fresnel_conductor(
+            1.0,
+            SampledSpectrum::splat(0.2),
+            SampledSpectrum::splat(3.0),
+        );
+        assert!((f[1] - (0.64 + 9.0) / (1.44 + 9.0)).abs() < 1e-5);
     }
 
     #[test]

@@ -4,15 +4,15 @@
 //! (Mitsuba, default 0.5).
 
 use super::sample::LocalSample;
-use crate::color::Rgb;
 use crate::math::{Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectrum::SampledSpectrum;
 
 /// f·cos θi for reflectance `r`.
 #[inline]
-pub fn eval(r: Rgb, wo: Vec3, wi: Vec3) -> Rgb {
+pub fn eval(r: SampledSpectrum, wo: Vec3, wi: Vec3) -> SampledSpectrum {
     if wo.z <= 0.0 || wi.z <= 0.0 {
-        return Rgb::BLACK;
+        return SampledSpectrum::ZERO;
     }
     r * (INV_PI * wi.z)
 }
@@ -28,7 +28,7 @@ pub fn pdf(wo: Vec3, wi: Vec3) -> f32 {
 
 /// Cosine-weighted sampling: the weight f·cos/pdf is ρ.
 #[inline]
-pub fn sample(r: Rgb, wo: Vec3, u: [f32; 2]) -> Option<LocalSample> {
+pub fn sample(r: SampledSpectrum, wo: Vec3, u: [f32; 2]) -> Option<LocalSample> {
     if wo.z <= 0.0 {
         return None;
     }

@@ -32,6 +32,7 @@ mod specular;
 
 pub use bsdf::{Bsdf, BsdfModel};
 pub use cook_torrance::CookTorrance;
+pub use dielectric::{Dispersion, REFERENCE_WAVELENGTH};
 pub use local_model::Whitted;
 pub use microfacet::{Distribution, Microfacet};
 pub use phong::{Lobe, PhongBrdf};
@@ -40,6 +41,7 @@ pub use sample::{BsdfSample, LocalSample};
 
 use crate::color::Rgb;
 use crate::math::{Frame, Point2};
+use crate::spectrum::{RgbRole, SampledSpectrum, Wavelengths};
 use crate::texture::Texture;
 
 /// Index of a material in the scene's table.
@@ -82,8 +84,10 @@ pub enum Model {
     },
     /// A smooth or rough dielectric interface (`glass`, Mitsuba `dielectric`, `roughdielectric`).
     Dielectric {
-        /// Relative index interior/exterior.
+        /// Relative index interior/exterior (in spectral mode, of non-dispersive glass).
         eta: f32,
+        /// An index that varies with the wavelength: used in spectral mode instead of `eta`.
+        dispersion: Option<Box<Dispersion>>,
         /// Scales reflection.
         reflectance: Texture,
         /// Scales transmission.
@@ -93,8 +97,9 @@ pub enum Model {
     },
     /// A smooth or rough conductor (Mitsuba `conductor`, `roughconductor`).
     Conductor {
-        /// Complex index (η, k) per channel; `None` is the ideal mirror (F = 1).
-        eta_k: Option<(Rgb, Rgb)>,
+        /// Complex index (η, k): colours or measured spectra; `None` is the ideal mirror
+        /// (F = 1).
+        eta_k: Option<(Texture, Texture)>,
         /// Scales the reflection.
         reflectance: Texture,
         /// `None` for a smooth conductor.
@@ -162,81 +167,84 @@ impl Material {
         Self::two_sided(Model::Diffuse { reflectance })
     }
 
-    /// The BSDF at a point with shading frame `frame` and surface coordinates `uv`.
+    /// The BSDF at a point with shading frame `frame` and surface coordinates `uv`, its colours
+    /// in the lanes of `w` (a dispersive dielectric keeps only the hero wavelength of a
+    /// spectral path).
     #[inline(always)]
-    pub fn bsdf(&self, frame: Frame, uv: Point2) -> Bsdf<'_> {
+    pub fn bsdf(&self, frame: Frame, uv: Point2, w: &mut Wavelengths) -> Bsdf<'_> {
         // Diffuse surfaces, the common case, without a call.
         if let Model::Diffuse { reflectance } = &self.model {
             return Bsdf {
-                model: BsdfModel::Lambert(reflectance.eval(uv)),
+                model: BsdfModel::Lambert(reflectance.spectral(uv, w, RgbRole::Reflectance)),
                 frame,
                 two_sided: self.two_sided,
             };
         }
-        self.bsdf_general(frame, uv)
+        self.bsdf_general(frame, uv, w)
     }
 
     /// [`Material::bsdf`] for every model.
     #[inline(never)]
-    fn bsdf_general(&self, frame: Frame, uv: Point2) -> Bsdf<'_> {
+    fn bsdf_general(&self, frame: Frame, uv: Point2, w: &mut Wavelengths) -> Bsdf<'_> {
+        let refl = |t: &Texture, w: &Wavelengths| t.spectral(uv, w, RgbRole::Reflectance);
         let model = match &self.model {
-            Model::Diffuse { reflectance } => BsdfModel::Lambert(reflectance.eval(uv)),
+            Model::Diffuse { reflectance } => BsdfModel::Lambert(refl(reflectance, w)),
             Model::Specular { reflectance } => BsdfModel::Mirror {
-                r: reflectance.eval(uv),
+                r: refl(reflectance, w),
                 eta_k: None,
             },
             Model::Phong { lobe, kd, ks, n } => BsdfModel::Phong(PhongBrdf {
                 lobe: *lobe,
-                kd: kd.eval(uv),
-                ks: ks.eval(uv),
+                kd: refl(kd, w),
+                ks: refl(ks, w),
                 n: *n,
             }),
             Model::CookTorrance { kd, ks, mf, ior } => BsdfModel::CookTorrance(CookTorrance {
-                kd: kd.eval(uv),
-                ks: ks.eval(uv),
+                kd: refl(kd, w),
+                ks: refl(ks, w),
                 mf: *mf,
                 ior: *ior,
             }),
             Model::Dielectric {
                 eta,
+                dispersion,
                 reflectance,
                 transmittance,
                 mf,
             } => {
-                let (r, t) = (reflectance.eval(uv), transmittance.eval(uv));
+                let (r, t) = (refl(reflectance, w), refl(transmittance, w));
+                let eta = dielectric::relative_eta(*eta, dispersion.as_deref(), w);
                 match mf {
-                    None => BsdfModel::Dielectric { eta: *eta, r, t },
-                    Some(mf) => BsdfModel::RoughDielectric {
-                        mf: *mf,
-                        eta: *eta,
-                        r,
-                        t,
-                    },
+                    None => BsdfModel::Dielectric { eta, r, t },
+                    Some(mf) => BsdfModel::RoughDielectric { mf: *mf, eta, r, t },
                 }
             }
             Model::Conductor {
                 eta_k,
                 reflectance,
                 mf,
-            } => match mf {
-                None => BsdfModel::Mirror {
-                    r: reflectance.eval(uv),
-                    eta_k: *eta_k,
-                },
-                Some(mf) => BsdfModel::RoughConductor {
-                    mf: *mf,
-                    eta_k: *eta_k,
-                    r: reflectance.eval(uv),
-                },
-            },
+            } => {
+                let eta_k = conductor_index(eta_k.as_ref(), uv, w);
+                match mf {
+                    None => BsdfModel::Mirror {
+                        r: refl(reflectance, w),
+                        eta_k,
+                    },
+                    Some(mf) => BsdfModel::RoughConductor {
+                        mf: *mf,
+                        eta_k,
+                        r: refl(reflectance, w),
+                    },
+                }
+            }
             Model::Plastic {
                 kd,
                 ks,
                 eta,
                 nonlinear,
             } => BsdfModel::Plastic(Plastic {
-                kd: kd.eval(uv),
-                ks: ks.eval(uv),
+                kd: refl(kd, w),
+                ks: refl(ks, w),
                 eta: *eta,
                 nonlinear: *nonlinear,
             }),
@@ -246,8 +254,8 @@ impl Material {
                 coating,
                 nonlinear,
             } => BsdfModel::RoughPlastic(RoughPlastic {
-                kd: kd.eval(uv),
-                ks: ks.eval(uv),
+                kd: refl(kd, w),
+                ks: refl(ks, w),
                 coating,
                 nonlinear: *nonlinear,
             }),
@@ -257,6 +265,41 @@ impl Material {
             model,
             frame,
             two_sided,
+        }
+    }
+
+    /// Readies the material for spectral rendering: uniform colours are upsampled once, here,
+    /// rather than at every hit (see [`Texture::prepare_spectral`]).
+    pub fn prepare_spectral(&mut self) {
+        let refl = RgbRole::Reflectance;
+        match &mut self.model {
+            Model::Diffuse { reflectance } | Model::Specular { reflectance } => {
+                reflectance.prepare_spectral(refl)
+            }
+            Model::Phong { kd, ks, .. }
+            | Model::CookTorrance { kd, ks, .. }
+            | Model::Plastic { kd, ks, .. }
+            | Model::RoughPlastic { kd, ks, .. } => {
+                kd.prepare_spectral(refl);
+                ks.prepare_spectral(refl);
+            }
+            Model::Dielectric {
+                reflectance,
+                transmittance,
+                ..
+            } => {
+                reflectance.prepare_spectral(refl);
+                transmittance.prepare_spectral(refl);
+            }
+            Model::Conductor {
+                eta_k, reflectance, ..
+            } => {
+                reflectance.prepare_spectral(refl);
+                if let Some((eta, k)) = eta_k {
+                    eta.prepare_spectral(RgbRole::OpticalConstant);
+                    k.prepare_spectral(RgbRole::OpticalConstant);
+                }
+            }
         }
     }
 
@@ -274,4 +317,19 @@ impl Material {
             Model::Conductor { reflectance, .. } => reflectance.eval(uv),
         }
     }
+}
+
+/// A conductor's complex index at `uv` in the lanes of `w`.
+#[inline]
+fn conductor_index(
+    eta_k: Option<&(Texture, Texture)>,
+    uv: Point2,
+    w: &Wavelengths,
+) -> Option<(SampledSpectrum, SampledSpectrum)> {
+    eta_k.map(|(eta, k)| {
+        (
+            eta.spectral(uv, w, RgbRole::OpticalConstant),
+            k.spectral(uv, w, RgbRole::OpticalConstant),
+        )
+    })
 }

@@ -13,9 +13,9 @@
 
 use super::fresnel::{reflect, reflect_z};
 use super::sample::{reflection_sample, specular_probability, LocalSample};
-use crate::color::Rgb;
 use crate::math::{Frame, Vec3, INV_PI, PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectrum::SampledSpectrum;
 
 /// Which specular lobe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,9 +32,9 @@ pub struct PhongBrdf {
     /// The lobe.
     pub lobe: Lobe,
     /// Diffuse coefficient.
-    pub kd: Rgb,
+    pub kd: SampledSpectrum,
     /// Specular coefficient.
-    pub ks: Rgb,
+    pub ks: SampledSpectrum,
     /// Exponent.
     pub n: f32,
 }
@@ -96,9 +96,9 @@ impl PhongBrdf {
     }
 
     /// f·cos θi of the normalised BRDF.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Rgb::BLACK;
+            return SampledSpectrum::ZERO;
         }
         let (s, _) = self.specular(wo, wi);
         (self.kd * INV_PI + self.ks * s) * wi.z
@@ -130,9 +130,15 @@ impl PhongBrdf {
     }
 
     /// The lecture's local model for one light: I_d·k_d·(n·l) + I_s·k_s·(r·v)^n (or (n·h)^n).
-    pub fn local(&self, wo: Vec3, wi: Vec3, id: Rgb, is: Rgb) -> Rgb {
+    pub fn local(
+        &self,
+        wo: Vec3,
+        wi: Vec3,
+        id: SampledSpectrum,
+        is: SampledSpectrum,
+    ) -> SampledSpectrum {
         if wi.z <= 0.0 {
-            return Rgb::BLACK;
+            return SampledSpectrum::ZERO;
         }
         let spec = match self.lobe {
             Lobe::Phong => reflect_z(wi).dot(wo).max(0.0).powf(self.n),

@@ -19,13 +19,13 @@ use super::fresnel::{
 };
 use super::microfacet::Microfacet;
 use super::sample::{reflection_sample, specular_probability, LocalSample};
-use crate::color::Rgb;
 use crate::math::{Vec3, INV_PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
+use crate::spectrum::SampledSpectrum;
 
 /// The diffuse base's effective reflectance after the internal reflections.
 #[inline]
-fn base(kd: Rgb, fdr_int: f32, nonlinear: bool) -> Rgb {
+fn base(kd: SampledSpectrum, fdr_int: f32, nonlinear: bool) -> SampledSpectrum {
     if nonlinear {
         kd.map(|c| c / (1.0 - c * fdr_int))
     } else {
@@ -37,9 +37,9 @@ fn base(kd: Rgb, fdr_int: f32, nonlinear: bool) -> Rgb {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plastic {
     /// Diffuse reflectance of the base.
-    pub kd: Rgb,
+    pub kd: SampledSpectrum,
     /// Specular reflectance of the coating.
-    pub ks: Rgb,
+    pub ks: SampledSpectrum,
     /// Relative index of the coating.
     pub eta: f32,
     /// Use the colour-dependent internal reflection term.
@@ -52,9 +52,9 @@ impl Plastic {
     }
 
     /// f·cos θi of the diffuse part (the specular part is a delta).
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Rgb::BLACK;
+            return SampledSpectrum::ZERO;
         }
         let f_i = fresnel_dielectric(wo.z, self.eta).0;
         let f_o = fresnel_dielectric(wi.z, self.eta).0;
@@ -199,9 +199,9 @@ fn over_normals(mf: &Microfacet, mu: f32, f: impl Fn(Vec3, Vec3) -> f32) -> f32 
 #[derive(Clone, Copy, Debug)]
 pub struct RoughPlastic<'a> {
     /// Diffuse reflectance of the base.
-    pub kd: Rgb,
+    pub kd: SampledSpectrum,
     /// Specular reflectance of the coating.
-    pub ks: Rgb,
+    pub ks: SampledSpectrum,
     /// The tabulated coating.
     pub coating: &'a RoughCoating,
     /// Use the colour-dependent internal reflection term.
@@ -214,14 +214,14 @@ impl RoughPlastic<'_> {
     }
 
     /// f·cos θi.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Rgb::BLACK;
+            return SampledSpectrum::ZERO;
         }
         let c = self.coating;
         let spec = match microfacet_lobe(&c.mf, wo, wi) {
             Some((v, h)) => self.ks * (fresnel_dielectric(wo.dot(h), c.eta).0 * v),
-            None => Rgb::BLACK,
+            None => SampledSpectrum::ZERO,
         };
         let (t_i, t_o) = (c.transmittance(wo.z), c.transmittance(wi.z));
         let diff = base(self.kd, c.internal_reflectance, self.nonlinear)

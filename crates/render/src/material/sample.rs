@@ -1,8 +1,8 @@
 //! What sampling a BSDF returns, in the local shading frame ([`LocalSample`]) and in the world
 //! ([`BsdfSample`]), and the helpers the two-lobe models share to build local samples.
 
-use crate::color::Rgb;
 use crate::math::Vec3;
+use crate::spectrum::SampledSpectrum;
 
 /// A sampled direction in the local frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -10,7 +10,7 @@ pub struct LocalSample {
     /// The sampled incident direction (local frame).
     pub wi: Vec3,
     /// f·|cos θi| / pdf.
-    pub weight: Rgb,
+    pub weight: SampledSpectrum,
     /// The density (the discrete probability for Dirac deltas).
     pub pdf: f32,
     /// The sample comes from a Dirac delta.
@@ -22,7 +22,7 @@ pub struct LocalSample {
 /// The probability of sampling the specular lobe of a two-lobe model: in proportion to the mean
 /// specular and diffuse coefficients, each weighted by the share of light that reaches its lobe
 /// (`share` for the specular one, e.g. a coating's reflectance; ½ when both see all the light).
-pub(crate) fn specular_probability(kd: Rgb, ks: Rgb, share: f32) -> f32 {
+pub(crate) fn specular_probability(kd: SampledSpectrum, ks: SampledSpectrum, share: f32) -> f32 {
     let (d, s) = (kd.average(), ks.average());
     let w = if d + s > 0.0 { s / (d + s) } else { 0.5 };
     let (ps, pd) = (share * w, (1.0 - share) * (1.0 - w));
@@ -36,7 +36,7 @@ pub(crate) fn specular_probability(kd: Rgb, ks: Rgb, share: f32) -> f32 {
 /// The sample of a reflection model at `wi`, weighted by `f·cos θi` over the density `pdf` of
 /// the mixture that drew it; `None` below the surface or where the density vanishes.
 #[inline]
-pub(crate) fn reflection_sample(wi: Vec3, pdf: f32, f_cos: Rgb) -> Option<LocalSample> {
+pub(crate) fn reflection_sample(wi: Vec3, pdf: f32, f_cos: SampledSpectrum) -> Option<LocalSample> {
     (wi.z > 0.0 && pdf > 0.0).then(|| LocalSample {
         wi,
         weight: f_cos / pdf,
@@ -52,7 +52,7 @@ pub struct BsdfSample {
     /// The incident direction (world, unit).
     pub wi: Vec3,
     /// f·|cos θi| / pdf.
-    pub weight: Rgb,
+    pub weight: SampledSpectrum,
     /// The density (the discrete probability for Dirac deltas).
     pub pdf: f32,
     /// The sample comes from a Dirac delta.

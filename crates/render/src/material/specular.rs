@@ -6,19 +6,23 @@
 
 use super::fresnel::{fresnel_conductor, reflect_z};
 use super::sample::LocalSample;
-use crate::color::Rgb;
 use crate::math::Vec3;
+use crate::spectrum::SampledSpectrum;
 
 /// Samples the mirror direction; the weight is `r` times the conductor's Fresnel reflectance
 /// (none for a perfect mirror).
 #[inline]
-pub fn sample(r: Rgb, conductor: Option<(Rgb, Rgb)>, wo: Vec3) -> Option<LocalSample> {
+pub fn sample(
+    r: SampledSpectrum,
+    conductor: Option<(SampledSpectrum, SampledSpectrum)>,
+    wo: Vec3,
+) -> Option<LocalSample> {
     if wo.z <= 0.0 {
         return None;
     }
     let f = match conductor {
         Some((eta, k)) => fresnel_conductor(wo.z, eta, k),
-        None => Rgb::WHITE,
+        None => SampledSpectrum::ONE,
     };
     Some(LocalSample {
         wi: reflect_z(wo),

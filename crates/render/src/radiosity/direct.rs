@@ -49,7 +49,8 @@ pub(crate) fn direct_sources(scene: &Scene, mesh: &Meshing, seed: u64) -> Vec<[f
                         continue;
                     }
                     let u = cmj(k, POINTS, pattern ^ (li as u32).wrapping_mul(0x85eb_ca6b));
-                    let Some(s) = light.sample(&scene.geometry, &scene.emissions, x, u) else {
+                    let rgb = &crate::spectrum::Wavelengths::Rgb;
+                    let Some(s) = light.sample(&scene.geometry, &scene.emissions, x, u, rgb) else {
                         continue;
                     };
                     let cos = nx.dot(s.wi);
@@ -64,9 +65,9 @@ pub(crate) fn direct_sources(scene: &Scene, mesh: &Meshing, seed: u64) -> Vec<[f
                         continue;
                     }
                     let w = cos / s.pdf;
-                    e[0] += (s.li.r * w) as f64;
-                    e[1] += (s.li.g * w) as f64;
-                    e[2] += (s.li.b * w) as f64;
+                    e[0] += (s.li[0] * w) as f64;
+                    e[1] += (s.li[1] * w) as f64;
+                    e[2] += (s.li[2] * w) as f64;
                 }
                 if !scene.background.is_black() {
                     let d = Frame::from_normal(nn)

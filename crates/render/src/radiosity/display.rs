@@ -18,8 +18,12 @@ use crate::color::Rgb;
 use crate::math::{Frame, Point3, Ray};
 use crate::sampling::{warp, Sampler};
 use crate::scene::Scene;
+use crate::spectrum::Wavelengths;
 use crate::stats::RayStats;
 use std::collections::HashMap;
+
+/// Radiosity is solved and shown in RGB.
+const RGB: Wavelengths = Wavelengths::Rgb;
 
 /// Cosine of the largest angle between normals averaged at a vertex.
 const CREASE_COS: f32 = 0.8;
@@ -225,18 +229,19 @@ impl Display {
         let mut ray = *camera_ray;
         for _ in 0..=MAX_SPECULAR {
             let Some(hit) = scene.intersect(&ray, stats) else {
-                l += beta * scene.escaped(ray.d.normalize());
+                l += beta * scene.escaped(ray.d.normalize(), &RGB).to_rgb();
                 break;
             };
             let si = scene.geometry.interaction(&ray, &hit);
-            l += beta * scene.emitted(&si);
+            l += beta * scene.emitted(&si, &RGB).to_rgb();
             let m = si.props.material as usize;
             if self.traced.get(m).copied().unwrap_or(false) {
-                let bsdf = scene.materials[m].bsdf(si.shading_frame(), si.uv);
+                let bsdf =
+                    scene.materials[m].bsdf(si.shading_frame(), si.uv, &mut Wavelengths::Rgb);
                 let Some(s) = bsdf.sample(si.wo, sampler.next_1d(), sampler.next_2d()) else {
                     break;
                 };
-                beta *= s.weight;
+                beta *= s.weight.to_rgb();
                 if beta.is_black() {
                     break;
                 }
@@ -267,12 +272,17 @@ impl Display {
         stats: &mut RayStats,
     ) -> Rgb {
         let mat = &scene.materials[si.props.material as usize];
-        let bsdf = mat.bsdf(si.shading_frame(), si.uv);
+        let bsdf = mat.bsdf(si.shading_frame(), si.uv, &mut Wavelengths::Rgb);
         let mut l = Rgb::BLACK;
         // Direct light: one sample of every light.
         for light in &scene.lights {
-            let Some(s) = light.sample(&scene.geometry, &scene.emissions, si.p, sampler.next_2d())
-            else {
+            let Some(s) = light.sample(
+                &scene.geometry,
+                &scene.emissions,
+                si.p,
+                sampler.next_2d(),
+                &RGB,
+            ) else {
                 continue;
             };
             let f = bsdf.eval(si.wo, s.wi);
@@ -285,7 +295,7 @@ impl Display {
                 crate::light::Target::Infinite => si.spawn_ray(s.wi),
             };
             if !scene.occluded(&shadow, stats) {
-                l += f * s.li / s.pdf;
+                l += (f * s.li).to_rgb() / s.pdf;
             }
         }
         // Indirect light: the stored reflected radiance where cosine rays land.

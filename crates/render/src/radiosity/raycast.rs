@@ -127,11 +127,15 @@ impl RayCasting<'_> {
                 if traced.get(m).copied().unwrap_or(false) {
                     // Follow the specular bounce with its mean weight.
                     let mat = &scene.materials[m];
-                    let bsdf = mat.bsdf(si.shading_frame(), si.uv);
+                    let bsdf = mat.bsdf(
+                        si.shading_frame(),
+                        si.uv,
+                        &mut crate::spectrum::Wavelengths::Rgb,
+                    );
                     let Some(s) = bsdf.sample(si.wo, sampler.next_1d(), sampler.next_2d()) else {
                         break;
                     };
-                    w *= s.weight.average().max(0.0) as f64;
+                    w *= s.weight.average_rgb().max(0.0) as f64;
                     if !(w > 0.0) || depth == MAX_SPECULAR {
                         break;
                     }

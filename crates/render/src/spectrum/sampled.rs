@@ -1,7 +1,7 @@
 //! `SampledSpectrum`: four f32 lanes, the per-ray spectral quantity.
 //!
 //! In spectral mode the lanes hold a quantity's values at the four wavelengths of a path's
-//! [`SampledWavelengths`](super::SampledWavelengths); in RGB mode they hold `(r, g, b, 0)`. All
+//! [`SampledWavelengths`](super::SampledWavelengths); in RGB mode they hold `(r, g, b, g)`. All
 //! operations are lane-wise plain loops over `[f32; 4]` without branches (selects only), the
 //! form LLVM turns into four-wide SSE operations (the type is 16-byte aligned; the
 //! transcendental `exp` stays four scalar calls).
@@ -15,7 +15,7 @@ use crate::color::Rgb;
 /// Number of lanes of a [`SampledSpectrum`] (and of wavelengths a path carries).
 pub const N_SPECTRUM_SAMPLES: usize = 4;
 
-/// Four values of a spectral quantity: one per sampled wavelength, or `(r, g, b, 0)`.
+/// Four values of a spectral quantity: one per sampled wavelength, or `(r, g, b, g)`.
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SampledSpectrum(pub [f32; N_SPECTRUM_SAMPLES]);
@@ -38,10 +38,11 @@ impl SampledSpectrum {
         Self([v; 4])
     }
 
-    /// An RGB triple in lanes 0–2, lane 3 zero (RGB mode).
+    /// An RGB triple in lanes 0–2, lane 3 repeating green (RGB mode: every lane holds a
+    /// real channel, so lane-wise arithmetic never meets an empty lane).
     #[inline]
     pub const fn from_rgb(c: Rgb) -> Self {
-        Self([c.r, c.g, c.b, 0.0])
+        Self([c.r, c.g, c.b, c.g])
     }
 
     /// Lanes 0–2 as RGB (RGB mode; lane 3 is ignored).
@@ -76,8 +77,7 @@ impl SampledSpectrum {
         Self(r)
     }
 
-    /// The largest lane (all four: RGB contents keep lane 3 at 0, which only matters when
-    /// every channel is negative).
+    /// The largest lane (all four: RGB contents repeat green in lane 3).
     #[inline]
     pub fn max_component(self) -> f32 {
         self.0[0].max(self.0[1]).max(self.0[2].max(self.0[3]))
@@ -100,6 +100,12 @@ impl SampledSpectrum {
     #[inline]
     pub fn average_rgb(self) -> f32 {
         (self.0[0] + self.0[1] + self.0[2]) * (1.0 / 3.0)
+    }
+
+    /// Lane-wise approximate equality (an RGB triple compares in RGB mode's layout).
+    pub fn approx_eq(self, o: impl Into<Self>, eps: f32) -> bool {
+        let o = o.into();
+        (0..N_SPECTRUM_SAMPLES).all(|i| (self.0[i] - o.0[i]).abs() <= eps)
     }
 
     /// True when every lane is exactly zero.
@@ -312,7 +318,7 @@ mod tests {
         );
         let rgb = Rgb::new(0.1, 0.2, 0.3);
         let s = SampledSpectrum::from_rgb(rgb);
-        assert_eq!(s.lanes(), [0.1, 0.2, 0.3, 0.0]);
+        assert_eq!(s.lanes(), [0.1, 0.2, 0.3, 0.2]);
         assert_eq!(s.to_rgb(), rgb);
         assert_eq!(
             SampledSpectrum::ZERO.lerp(SampledSpectrum::ONE, 0.25),

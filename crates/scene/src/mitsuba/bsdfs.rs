@@ -11,8 +11,10 @@ use super::xml::Element;
 use super::{presets, Loader};
 use crate::error::{Pos, SceneError};
 use candela_render::material::{
-    Distribution, Material, MaterialId, Microfacet, Model, RoughCoating,
+    Dispersion, Distribution, Material, MaterialId, Microfacet, Model, RoughCoating,
+    REFERENCE_WAVELENGTH,
 };
+use candela_render::spectrum::{Ior, RgbRole, Spectrum, LAMBDA_MAX, LAMBDA_MIN};
 use candela_render::texture::{Filter, ImageTexture, Texture, Wrap};
 use candela_render::{Image, Rgb};
 use std::sync::Arc;
@@ -111,12 +113,15 @@ impl<'t> Loader<'t> {
                 reflectance: self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?,
                 mf: if kind == "roughconductor" { Some(self.microfacet(&p)?) } else { None },
             },
-            "dielectric" | "roughdielectric" => Model::Dielectric {
-                eta: self.eta(&p, "bk7")?,
+            "dielectric" | "roughdielectric" => {
+                let (eta, dispersion) = self.dispersive_eta(&p)?;
+                Model::Dielectric {
+                eta,
+                dispersion,
                 reflectance: self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?,
                 transmittance: self.tex(&p, "specular_transmittance", 1.0, false, &mut textured)?,
                 mf: if kind == "roughdielectric" { Some(self.microfacet(&p)?) } else { None },
-            },
+            }},
             "plastic" | "roughplastic" => {
                 let kd = self.tex(&p, "diffuse_reflectance", 0.5, false, &mut textured)?;
                 let ks = self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?;
@@ -169,7 +174,46 @@ impl<'t> Loader<'t> {
     }
 
     /// The relative index `int_ior / ext_ior`; each is a number or a named material.
+    /// A dielectric's relative index, and its dispersion when `int_ior` is a `<spectrum>` of
+    /// λ:n pairs (a candela extension; RGB renders use the index at the sodium D line,
+    /// [`REFERENCE_WAVELENGTH`]).
+    fn dispersive_eta(&mut self, p: &Props) -> Result<(f32, Option<Box<Dispersion>>), SceneError> {
+        let spectrum = match p.item("int_ior").map(|i| (&i.value, i.pos)) {
+            Some((Value::Spectrum(s), pos)) => Some((s.clone(), pos)),
+            Some((&Value::SpectrumFile(f, fpos), pos)) => Some((self.spectrum_file(f, fpos)?, pos)),
+            _ => None,
+        };
+        let Some((s, pos)) = spectrum else {
+            return Ok((self.eta(p, "bk7")?, None));
+        };
+        let interior = match s {
+            Spectrum::Constant(c) => Ior::Constant(c),
+            Spectrum::Tabulated(t) => Ior::Tabulated(t),
+            _ => {
+                return Err(p.error(
+                    pos,
+                    "'int_ior' as a spectrum must be a number or wavelength:index pairs",
+                ))
+            }
+        };
+        let n_d = interior.eval(REFERENCE_WAVELENGTH);
+        let bad = |lambda: f32| !(interior.eval(lambda) > 0.0 && interior.eval(lambda).is_finite());
+        if bad(n_d) || bad(LAMBDA_MIN) || bad(LAMBDA_MAX) {
+            return Err(p.error(pos, "'int_ior' must be positive at every wavelength"));
+        }
+        let exterior = self.eta_of(p, "ext_ior", "air")?;
+        Ok((
+            n_d / exterior,
+            Some(Box::new(Dispersion { interior, exterior })),
+        ))
+    }
+
     fn eta(&self, p: &Props, int_default: &str) -> Result<f32, SceneError> {
+        Ok(self.eta_of(p, "int_ior", int_default)? / self.eta_of(p, "ext_ior", "air")?)
+    }
+
+    /// The index of refraction `name`: a number or one of Mitsuba's named materials.
+    fn eta_of(&self, p: &Props, name: &str, default: &str) -> Result<f32, SceneError> {
         let ior = |name: &str, default: &str| -> Result<f32, SceneError> {
             let v = match p.item(name).map(|i| (&i.value, i.pos)) {
                 None => presets::ior(default).unwrap_or(1.0),
@@ -199,12 +243,12 @@ impl<'t> Loader<'t> {
             }
             Ok(v)
         };
-        Ok(ior("int_ior", int_default)? / ior("ext_ior", "air")?)
+        ior(name, default)
     }
 
     /// A conductor's (η, k): from `eta` and `k`, or the named `material`; `None` for "none"
     /// (the perfect mirror, F = 1).
-    fn conductor_ior(&self, p: &Props) -> Result<Option<(Rgb, Rgb)>, SceneError> {
+    fn conductor_ior(&mut self, p: &Props) -> Result<Option<(Texture, Texture)>, SceneError> {
         if p.has("eta") || p.has("k") {
             if p.has("material") {
                 return Err(p.error(
@@ -213,11 +257,12 @@ impl<'t> Loader<'t> {
                 ));
             }
             let (eta, k) = (
-                self.color(p, "eta", 0.0, false)?,
-                self.color(p, "k", 1.0, false)?,
+                self.colour(p, "eta", 0.0, RgbRole::Unbounded)?,
+                self.colour(p, "k", 1.0, RgbRole::Unbounded)?,
             );
             // η = 0, k = 1 is Mitsuba's "none".
-            return Ok((eta != Rgb::BLACK || k != Rgb::WHITE).then_some((eta, k)));
+            let none = eta == (Rgb::BLACK, None) && k == (Rgb::WHITE, None);
+            return Ok((!none).then(|| (colour_texture(eta), colour_texture(k))));
         }
         let name = p.or("material", "none".to_string())?;
         if name == "none" {
@@ -233,7 +278,14 @@ impl<'t> Loader<'t> {
             )
         })?;
         let rgb = |c: [f32; 3]| Rgb::new(c[0], c[1], c[2]);
-        Ok(Some((rgb(eta), rgb(k))))
+        // The measured η(λ), k(λ) for spectral renders; Mitsuba's RGB values otherwise.
+        Ok(Some(match candela_render::spectrum::metal(&name) {
+            Some((se, sk)) => (
+                Texture::spectrum(se, rgb(eta)),
+                Texture::spectrum(sk, rgb(k)),
+            ),
+            None => (Texture::Uniform(rgb(eta)), Texture::Uniform(rgb(k))),
+        }))
     }
 
     /// A property that may vary over a surface: a colour, a number, or a `<texture>`
@@ -261,7 +313,14 @@ impl<'t> Loader<'t> {
         };
         let t = match nested {
             Some((e, _)) => self.texture_plugin(e)?,
-            None => Texture::Uniform(self.color(p, name, default, emitted)?),
+            None => {
+                let role = if emitted {
+                    RgbRole::Emission
+                } else {
+                    RgbRole::Reflectance
+                };
+                colour_texture(self.colour(p, name, default, role)?)
+            }
         };
         *textured |= varies(&t);
         Ok(t)
@@ -393,5 +452,13 @@ impl<'t> Loader<'t> {
         let img = Arc::new(img);
         self.images.insert((path, raw), img.clone());
         Ok(img)
+    }
+}
+
+/// A colour as a texture: uniform, or the spectrum it was given as (with its RGB conversion).
+pub(super) fn colour_texture((rgb, spectrum): (Rgb, Option<Arc<Spectrum>>)) -> Texture {
+    match spectrum {
+        Some(s) => Texture::Spectral { rgb, spectrum: s },
+        None => Texture::Uniform(rgb),
     }
 }

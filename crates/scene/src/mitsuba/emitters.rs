@@ -10,6 +10,7 @@ use candela_render::light::{
     SpotProfile,
 };
 use candela_render::math::{Point3, Transform, Vec3};
+use candela_render::spectrum::RgbRole;
 use candela_render::texture::{Filter, ImageTexture, Texture, Wrap};
 use std::sync::Arc;
 
@@ -20,7 +21,7 @@ impl<'t> Loader<'t> {
         p.ignore(&["sampling_weight"]);
         let light = match e.kind() {
             kind @ ("point" | "spot") => {
-                let intensity = self.color(&p, "intensity", 1.0, true)?;
+                let (intensity, spectrum) = self.colour(&p, "intensity", 1.0, RgbRole::Emission)?;
                 let (m, _) = self.to_world(&p)?;
                 let position = match p.get::<[f64; 3]>("position")? {
                     Some(_) if p.has("to_world") => return Err(p.error(p.pos("position"), "give either 'position' or 'to_world', not both")),
@@ -33,6 +34,7 @@ impl<'t> Loader<'t> {
                         PointLight {
                             position,
                             intensity,
+                            spectrum: spectrum.clone(),
                             falloff: Falloff::INVERSE_SQUARE,
                         },
                         Components::from_intensity(intensity),
@@ -56,6 +58,7 @@ impl<'t> Loader<'t> {
                             position,
                             axis,
                             intensity,
+                            spectrum,
                             cos_cutoff: cutoff.to_radians().cos() as f32,
                             profile: SpotProfile::Linear(beam.to_radians().cos() as f32),
                             falloff: Falloff::INVERSE_SQUARE,
@@ -66,7 +69,7 @@ impl<'t> Loader<'t> {
                 }
             }
             "directional" => {
-                let irradiance = self.color(&p, "irradiance", 1.0, true)?;
+                let (irradiance, spectrum) = self.colour(&p, "irradiance", 1.0, RgbRole::Emission)?;
                 let (m, _) = self.to_world(&p)?;
                 let dir = match p.get::<[f64; 3]>("direction")? {
                     Some(_) if p.has("to_world") => return Err(p.error(p.pos("direction"), "give either 'direction' or 'to_world', not both")),
@@ -74,9 +77,12 @@ impl<'t> Loader<'t> {
                     None => m.vector([0.0, 0.0, 1.0]),
                 };
                 let direction = unit(dir).ok_or_else(|| p.error(p.pos("direction"), "the direction must not be the zero vector"))?;
-                Light::Distant(DistantLight { direction, irradiance }, Components::from_intensity(irradiance))
+                Light::Distant(DistantLight { direction, irradiance, spectrum }, Components::from_intensity(irradiance))
             }
-            "constant" => Light::Environment(Environment::new(Texture::Uniform(self.color(&p, "radiance", 1.0, true)?), Transform::IDENTITY)),
+            "constant" => {
+                let radiance = super::bsdfs::colour_texture(self.colour(&p, "radiance", 1.0, RgbRole::Emission)?);
+                Light::Environment(Environment::new(radiance, Transform::IDENTITY))
+            }
             "envmap" => {
                 let (m, _) = self.to_world(&p)?;
                 let (name, pos) = p.get::<String>("filename")?.ok_or_else(|| p.error(e.pos, "envmap needs a 'filename'"))?;

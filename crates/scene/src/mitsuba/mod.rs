@@ -59,6 +59,7 @@ mod presets;
 mod props;
 mod sensor;
 mod shapes;
+mod spectra;
 mod xml;
 
 use self::include::{Expander, Sources};
@@ -71,6 +72,7 @@ use candela_render::material::MaterialId;
 use candela_render::math::Transform;
 use candela_render::scene::SceneBuilder;
 use candela_render::shape::Mesh;
+use candela_render::spectrum::{RgbRole, Spectrum};
 use candela_render::texture::Texture;
 use candela_render::{Image, Rgb};
 use sensor::default_camera;
@@ -246,10 +248,6 @@ fn collect_ids<'t>(
     Ok(())
 }
 
-/// The linear sRGB colour of a flat (equal-energy) spectrum of value 1, as Mitsuba's RGB
-/// variants convert emitted spectra (it is not white: white is D65).
-const FLAT_SPECTRUM: Rgb = Rgb::new(1.20479, 0.948291, 0.908916);
-
 /// The importer's state while it walks the scene.
 struct Loader<'t> {
     src: SourceFile,
@@ -352,19 +350,46 @@ impl<'t> Loader<'t> {
         Ok((m, t))
     }
 
-    /// A colour property that must not vary over a surface: a number, `<rgb>` or `<spectrum>`.
-    /// A flat `<spectrum>` is grey, except for what emitters emit (`emitted`), where Mitsuba's
-    /// RGB variants give it the colour of a flat spectrum.
-    fn color(&self, p: &Props, name: &str, default: f32, emitted: bool) -> Result<Rgb, SceneError> {
+    /// A colour property that must not vary over a surface: a number, `<rgb>` or `<spectrum>`,
+    /// as RGB (what Mitsuba's RGB variants make of it: a flat `<spectrum>` is grey, except for
+    /// what emitters emit (`emitted`), where it has the colour of a flat spectrum).
+    fn color(
+        &mut self,
+        p: &Props,
+        name: &str,
+        default: f32,
+        emitted: bool,
+    ) -> Result<Rgb, SceneError> {
+        let role = if emitted {
+            RgbRole::Emission
+        } else {
+            RgbRole::Reflectance
+        };
+        Ok(self.colour(p, name, default, role)?.0)
+    }
+
+    /// A colour property as RGB in `role` (see [`Spectrum::to_rgb`]) and, when given as a
+    /// `<spectrum>`, the spectrum itself (for spectral renders).
+    fn colour(
+        &mut self,
+        p: &Props,
+        name: &str,
+        default: f32,
+        role: RgbRole,
+    ) -> Result<(Rgb, Option<Arc<Spectrum>>), SceneError> {
         let Some(i) = p.item(name) else {
-            return Ok(Rgb::splat(default));
+            return Ok((Rgb::splat(default), None));
+        };
+        let spectrum = |s: Spectrum| {
+            let rgb = s.to_rgb(role);
+            Ok((rgb, Some(Arc::new(s))))
         };
         match i.value {
-            props::Value::Float(v) => Ok(Rgb::splat(v as f32)),
-            props::Value::Int(v) => Ok(Rgb::splat(v as f32)),
-            props::Value::Spectrum(v) if emitted => Ok(FLAT_SPECTRUM * v as f32),
-            props::Value::Spectrum(v) => Ok(Rgb::splat(v as f32)),
-            props::Value::Rgb([r, g, b]) => Ok(Rgb::new(r as f32, g as f32, b as f32)),
+            props::Value::Float(v) => Ok((Rgb::splat(v as f32), None)),
+            props::Value::Int(v) => Ok((Rgb::splat(v as f32), None)),
+            props::Value::Spectrum(ref s) => spectrum(s.clone()),
+            props::Value::SpectrumFile(f, pos) => spectrum(self.spectrum_file(f, pos)?),
+            props::Value::Rgb([r, g, b]) => Ok((Rgb::new(r as f32, g as f32, b as f32), None)),
             ref v => Err(self.err(
                 i.pos,
                 format!(
@@ -373,6 +398,33 @@ impl<'t> Loader<'t> {
                 ),
             )),
         }
+    }
+
+    /// The tabulated spectrum in the file `name` (`λ value` lines, `#` comments).
+    fn spectrum_file(&mut self, name: &str, pos: Pos) -> Result<Spectrum, SceneError> {
+        let path = self.resolve(name);
+        crate::inputs::record(&path);
+        let bytes = candela_imageio::input::read_file(&path, self.limits.max_file_bytes)
+            .map_err(|e| self.err(pos, format!("cannot read spectrum '{name}': {e}")))?;
+        self.inputs.push(path);
+        let text = String::from_utf8(bytes)
+            .map_err(|_| self.err(pos, format!("spectrum '{name}' is not UTF-8 text")))?;
+        let s = Spectrum::parse_spd(&text).map_err(|e| {
+            let at = e.line.map(|l| format!(" (line {l})")).unwrap_or_default();
+            self.err(pos, format!("spectrum '{name}'{at}: {}", e.message))
+        })?;
+        if let Spectrum::Tabulated(t) = &s {
+            if t.samples().len() > spectra::MAX_SPECTRUM_SAMPLES {
+                return Err(self.err(
+                    pos,
+                    format!(
+                        "spectrum '{name}' has more than {} samples",
+                        spectra::MAX_SPECTRUM_SAMPLES
+                    ),
+                ));
+            }
+        }
+        Ok(s)
     }
 
     /// The children of `<scene>`, in order.

@@ -21,8 +21,10 @@ pub(super) enum Value<'t> {
     Str(&'t str),
     /// `<rgb>`.
     Rgb([f64; 3]),
-    /// A `<spectrum>` with one value: a flat spectrum.
-    Spectrum(f64),
+    /// A `<spectrum>` (see `spectra.rs`).
+    Spectrum(candela_render::spectrum::Spectrum),
+    /// A `<spectrum filename="…">`, read when the property is used.
+    SpectrumFile(&'t str, Pos),
     /// `<point>` or `<vector>`.
     Vector([f64; 3]),
     /// `<transform>`.
@@ -39,7 +41,7 @@ impl Value<'_> {
             Value::Int(_) => "an integer".into(),
             Value::Bool(_) => "a boolean".into(),
             Value::Str(_) => "a string".into(),
-            Value::Rgb(_) | Value::Spectrum(_) => "a colour".into(),
+            Value::Rgb(_) | Value::Spectrum(_) | Value::SpectrumFile(..) => "a colour".into(),
             Value::Vector(_) => "a point or vector".into(),
             Value::Transform(_) => "a transform".into(),
             Value::Object(e) => e.describe(),
@@ -153,99 +155,72 @@ impl<'t> Props<'t> {
                 c.attr(attr)
                     .ok_or_else(|| err(format!("<{}> needs the attribute '{attr}'", c.tag)))
             };
-            let value =
-                match c.tag.as_str() {
-                    "float" => Value::Float(number(src, need("value")?)?),
-                    "integer" => {
-                        let a = need("value")?;
-                        Value::Int(a.value.trim().parse::<i64>().map_err(|e| {
-                            let why = match e.kind() {
-                                std::num::IntErrorKind::PosOverflow
-                                | std::num::IntErrorKind::NegOverflow => "is out of range",
-                                _ => "is not an integer",
-                            };
-                            src.error(a.pos, format!("'{}' {why}", a.value))
-                        })?)
-                    }
-                    "boolean" => {
-                        let a = need("value")?;
-                        match a.value.trim().to_ascii_lowercase().as_str() {
-                            "true" => Value::Bool(true),
-                            "false" => Value::Bool(false),
-                            _ => {
-                                return Err(src.error(
-                                    a.pos,
-                                    format!("'{}' is not a boolean (true or false)", a.value),
-                                ))
-                            }
-                        }
-                    }
-                    "string" => Value::Str(&need("value")?.value),
-                    "rgb" => {
-                        let a = need("value")?;
-                        match numbers(src, a)?.as_slice() {
-                            [v] => Value::Rgb([*v; 3]),
-                            [r, g, b] => Value::Rgb([*r, *g, *b]),
-                            v => {
-                                return Err(src.error(
-                                    a.pos,
-                                    format!("<rgb> needs one or three values, not {}", v.len()),
-                                ))
-                            }
-                        }
-                    }
-                    "spectrum" => {
-                        if c.attr("type").is_some() {
-                            return Err(err(format!(
-                                "spectrum plugins ({}) are not supported: use <rgb>",
-                                c.describe()
-                            )));
-                        }
-                        if let Some(f) = c.attr("filename") {
-                            return Err(
-                                src.error(f.pos, "spectra from files are not supported: use <rgb>")
-                            );
-                        }
-                        let a = need("value")?;
-                        if a.value.contains(':') {
+            let value = match c.tag.as_str() {
+                "float" => Value::Float(number(src, need("value")?)?),
+                "integer" => {
+                    let a = need("value")?;
+                    Value::Int(a.value.trim().parse::<i64>().map_err(|e| {
+                        let why = match e.kind() {
+                            std::num::IntErrorKind::PosOverflow
+                            | std::num::IntErrorKind::NegOverflow => "is out of range",
+                            _ => "is not an integer",
+                        };
+                        src.error(a.pos, format!("'{}' {why}", a.value))
+                    })?)
+                }
+                "boolean" => {
+                    let a = need("value")?;
+                    match a.value.trim().to_ascii_lowercase().as_str() {
+                        "true" => Value::Bool(true),
+                        "false" => Value::Bool(false),
+                        _ => {
                             return Err(src.error(
-                            a.pos,
-                            "spectra given as wavelength:value pairs are not supported: use <rgb>",
-                        ));
-                        }
-                        match numbers(src, a)?.as_slice() {
-                            [v] => Value::Spectrum(*v),
-                            _ => return Err(src.error(
                                 a.pos,
-                                "a <spectrum> needs a single value here (use <rgb> for colours)",
-                            )),
+                                format!("'{}' is not a boolean (true or false)", a.value),
+                            ))
                         }
                     }
-                    "point" | "vector" => Value::Vector(vector(src, c, 0.0, true)?),
-                    "transform" => Value::Transform(transform(src, c, &mut notes)?),
-                    "ref" => {
-                        let a = need("id")?;
-                        let target = ids
-                            .get(a.value.as_str())
-                            .ok_or_else(|| src.error(a.pos, format!("unknown id '{}'", a.value)))?;
-                        Value::Object(target)
+                }
+                "string" => Value::Str(&need("value")?.value),
+                "rgb" => {
+                    let a = need("value")?;
+                    match numbers(src, a)?.as_slice() {
+                        [v] => Value::Rgb([*v; 3]),
+                        [r, g, b] => Value::Rgb([*r, *g, *b]),
+                        v => {
+                            return Err(src.error(
+                                a.pos,
+                                format!("<rgb> needs one or three values, not {}", v.len()),
+                            ))
+                        }
                     }
-                    "bsdf" | "texture" | "emitter" | "shape" | "sensor" | "film" | "sampler"
-                    | "rfilter" | "integrator" | "medium" | "phase" | "volume" => Value::Object(c),
-                    "default" | "alias" | "path" => continue,
-                    "translate" | "rotate" | "scale" | "matrix" | "lookat" => {
-                        return Err(err(format!(
-                            "<{}> can only appear inside a <transform>",
-                            c.tag
-                        )))
-                    }
-                    "include" => {
-                        return Err(err(
-                            "<include> is not supported: paste the included file instead".into(),
-                        ))
-                    }
-                    t => return Err(err(format!("unknown element <{t}>"))),
-                };
+                }
+                "spectrum" => super::spectra::spectrum_value(src, c)?,
+                "point" | "vector" => Value::Vector(vector(src, c, 0.0, true)?),
+                "transform" => Value::Transform(transform(src, c, &mut notes)?),
+                "ref" => {
+                    let a = need("id")?;
+                    let target = ids
+                        .get(a.value.as_str())
+                        .ok_or_else(|| src.error(a.pos, format!("unknown id '{}'", a.value)))?;
+                    Value::Object(target)
+                }
+                "bsdf" | "texture" | "emitter" | "shape" | "sensor" | "film" | "sampler"
+                | "rfilter" | "integrator" | "medium" | "phase" | "volume" => Value::Object(c),
+                "default" | "alias" | "path" => continue,
+                "translate" | "rotate" | "scale" | "matrix" | "lookat" => {
+                    return Err(err(format!(
+                        "<{}> can only appear inside a <transform>",
+                        c.tag
+                    )))
+                }
+                "include" => {
+                    return Err(err(
+                        "<include> is not supported: paste the included file instead".into(),
+                    ))
+                }
+                t => return Err(err(format!("unknown element <{t}>"))),
+            };
             if !matches!(value, Value::Object(_)) {
                 match c.children.first() {
                     Some(g) if !matches!(value, Value::Transform(_)) => {
