@@ -11,7 +11,7 @@ use crate::material::{Material, MaterialId};
 use crate::math::{Point3, Ray, RayBatch, Transform, Vec3};
 use crate::sampling::pcg::hash2;
 use crate::shape::{Mesh, Shape, ShearedRay};
-use crate::spectrum::{RgbRole, SampledSpectrum, Wavelengths};
+use crate::spectrum::{upsample, RgbRole, SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 
 /// A scene ready to render.
@@ -72,9 +72,18 @@ impl Scene {
         for e in &mut self.emissions {
             e.radiance.prepare_spectral(RgbRole::Emission);
         }
+        let prepared = |rgb: Rgb, s: &mut Option<std::sync::Arc<crate::spectrum::Spectrum>>| {
+            if s.is_none() {
+                *s = Some(std::sync::Arc::new(upsample(rgb, RgbRole::Emission)));
+            }
+        };
         for l in &mut self.lights {
-            if let Light::Environment(e) = l {
-                e.radiance.prepare_spectral(RgbRole::Emission);
+            match l {
+                Light::Environment(e) => e.radiance.prepare_spectral(RgbRole::Emission),
+                Light::Point(p, _) => prepared(p.intensity, &mut p.spectrum),
+                Light::Spot(p, _) => prepared(p.intensity, &mut p.spectrum),
+                Light::Distant(d, _) => prepared(d.irradiance, &mut d.spectrum),
+                Light::Hemisphere(..) | Light::Area(_) => {}
             }
         }
     }

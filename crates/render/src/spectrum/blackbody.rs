@@ -56,7 +56,7 @@ pub fn planck_unbounded(lambda: f64, temperature: f64) -> f64 {
 /// Planck's law at four wavelengths (0 outside 360–830 nm).
 #[inline]
 pub fn planck4(lambda: &SampledWavelengths, temperature: f32) -> SampledSpectrum {
-    SampledSpectrum(lambda.lambdas().map(|l| planck(l, temperature)))
+    lambda.eval(|l| planck(l, temperature))
 }
 
 /// The peak value of Planck's law over all wavelengths, at Wien's λ_max = b/T (pbrt-v4

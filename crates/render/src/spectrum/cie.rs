@@ -78,7 +78,7 @@ pub fn d65_normalized(lambda: f32) -> f32 {
 /// [`d65_normalized`] at four wavelengths.
 #[inline]
 pub fn d65_normalized4(lambda: &SampledWavelengths) -> SampledSpectrum {
-    SampledSpectrum(lambda.lambdas().map(d65_normalized))
+    lambda.eval(d65_normalized)
 }
 
 /// The colour-matching functions at four wavelengths: `[x̄, ȳ, z̄]`, each lane-wise.
@@ -111,7 +111,7 @@ pub fn to_xyz(s: &SampledSpectrum, lambda: &SampledWavelengths) -> [f32; 3] {
 /// The Monte Carlo estimate of Y alone (see [`to_xyz`]).
 #[inline]
 pub fn to_y(s: &SampledSpectrum, lambda: &SampledWavelengths) -> f32 {
-    let y = SampledSpectrum(lambda.lambdas().map(cie_y));
+    let y = lambda.eval(cie_y);
     (y * s.safe_div(lambda.pdf())).average() / CIE_Y_INTEGRAL
 }
 

@@ -124,6 +124,7 @@ impl Spectrum {
     }
 
     /// The values at four sampled wavelengths.
+    #[inline]
     pub fn eval4(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
             Self::Constant(c) => SampledSpectrum::splat(*c),

@@ -104,7 +104,7 @@ impl Ior {
     /// The indices at four wavelengths.
     #[inline]
     pub fn eval4(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
-        SampledSpectrum(lambda.lambdas().map(|l| self.eval(l)))
+        lambda.eval(|l| self.eval(l))
     }
 
     /// True when the index depends on the wavelength (a refraction must then terminate the

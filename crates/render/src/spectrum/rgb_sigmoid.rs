@@ -90,7 +90,15 @@ impl RgbSigmoid {
     /// The spectrum at four wavelengths.
     #[inline]
     pub fn eval4(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
-        SampledSpectrum(lambda.lambdas().map(|l| self.eval(l)))
+        if self.c2.is_infinite() {
+            return SampledSpectrum::splat(sigmoid(self.c2));
+        }
+        // Branch-free lanes (four-wide square root and division).
+        let (c0, c1, c2) = (self.c0, self.c1, self.c2);
+        lambda.eval(|l| {
+            let x = (c0 * l + c1) * l + c2;
+            0.5 + 0.5 * x / (1.0 + x * x).sqrt()
+        })
     }
 
     /// The maximum over 360–830 nm (at an end or at the vertex of the quadratic; S is

@@ -203,7 +203,7 @@ impl TabulatedSpectrum {
     /// [`eval`](Self::eval) at four wavelengths.
     #[inline]
     pub fn eval4(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
-        SampledSpectrum(lambda.lambdas().map(|l| self.eval(l)))
+        lambda.eval(|l| self.eval(l))
     }
 
     /// The largest sample value.

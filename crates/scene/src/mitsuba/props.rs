@@ -223,7 +223,11 @@ impl<'t> Props<'t> {
             };
             if !matches!(value, Value::Object(_)) {
                 match c.children.first() {
-                    Some(g) if !matches!(value, Value::Transform(_)) => {
+                    // Transforms and spectrum plugins (`<spectrum type="…">`) have children.
+                    Some(g)
+                        if !matches!(value, Value::Transform(_))
+                            && !(c.tag == "spectrum" && c.attr("type").is_some()) =>
+                    {
                         return Err(src.error(
                             g.pos,
                             format!("<{}> cannot appear inside the property <{}>", g.tag, c.tag),
