@@ -34,8 +34,14 @@
 //!   the rotation of the polar decomposition instead of Mitsuba's inverse `to_world`;
 //! - reconstruction filters are importance-sampled (no splatting; Gaussian when the film names
 //!   none, as in Mitsuba), crop windows are ignored (warnings);
-//! - colours are RGB: spectra must be single values (a flat emitted spectrum has the colour of
-//!   illuminant E, as in Mitsuba's RGB variants); conductor presets are Mitsuba's RGB values;
+//! - spectra (`<spectrum>` values, λ:value lists, files and the `uniform`, `blackbody`,
+//!   `regular`, `irregular`, `d65`, `srgb` plugins; see `spectra.rs`) are used as they are by
+//!   spectral renders (`--spectral`, as Mitsuba's spectral variants) and converted to RGB as
+//!   Mitsuba's RGB variants do otherwise (a flat emitted spectrum has the colour of illuminant
+//!   E; a blackbody, which Mitsuba's RGB variants refuse, gets its colour); named conductors use
+//!   their measured η(λ), k(λ) spectrally and Mitsuba's RGB values otherwise; a dielectric's
+//!   `int_ior` may be a `<spectrum>` of λ:n pairs (a candela extension: dispersion, spectral
+//!   renders only; RGB renders use the index at 587.56 nm);
 //! - a scene without `<sensor>` gets a default camera (Mitsuba 3.9.1 cannot render it).
 //! - `mask`: shadow rays pass masked surfaces stochastically (Mitsuba's stop at them, so its
 //!   point and spot lights cast full shadows behind masks); a pass is not a bounce (Mitsuba
