@@ -128,6 +128,21 @@ pub fn default_output(scene: &Path) -> String {
     format!("{stem}.png")
 }
 
+/// `--spectral` with an integrator that computes colours (radiosity, the preview views) is a
+/// usage error.
+pub fn spectral_integrator(a: &RenderArgs, kind: IntegratorKind) -> Result<(), Usage> {
+    if a.spectral && !kind.spectral() {
+        let name = IntegratorKind::NAMES[IntegratorKind::NAMES
+            .iter()
+            .position(|n| IntegratorKind::from_name(n) == Some(kind))
+            .unwrap_or(0)];
+        return Err(Usage(format!(
+            "--spectral: the {name} integrator computes colours, not radiance per wavelength (spectral rendering is for path, direct, local and whitted)"
+        )));
+    }
+    Ok(())
+}
+
 fn render_args(a: &RenderArgs, xml: bool) -> Result<(), Usage> {
     let integrator = match &a.integrator {
         None => None,
@@ -173,6 +188,9 @@ fn render_args(a: &RenderArgs, xml: bool) -> Result<(), Usage> {
         if name.trim().is_empty() {
             return Err(Usage(format!("--define '{d}': the name is empty")));
         }
+    }
+    if let Some(kind) = integrator {
+        spectral_integrator(a, kind)?;
     }
     // Depths: an XML scene may set the integrator and its depth, checked when it is loaded.
     let kind = integrator.or((!xml).then_some(IntegratorKind::Path));

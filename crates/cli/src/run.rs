@@ -318,18 +318,7 @@ fn render_frame(
         spectral: args.spectral,
     };
     if args.spectral {
-        if matches!(
-            kind,
-            IntegratorKind::Radiosity
-                | IntegratorKind::OnOff
-                | IntegratorKind::Flat
-                | IntegratorKind::Normals
-                | IntegratorKind::Depth
-        ) {
-            anyhow::bail!(
-                "--spectral: the {name} integrator computes colours, not radiance per wavelength (spectral rendering is for path, direct, local and whitted)"
-            );
-        }
+        crate::inputs::spectral_integrator(args, kind)?;
         loaded.scene.prepare_spectral();
     }
     crate::inputs::check_render(settings.width, settings.height, args)?;

@@ -16,7 +16,7 @@ use crate::aov::{aov_sample, emission_aa as emission_aa_of, near_light_edge, Aov
 use crate::film::{to_fixed, Film, Window};
 use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
-use crate::integrator::Integrator;
+use crate::integrator::{Integrator, SampleBatch};
 use crate::math::{Point3, Ray, Vec3, BATCH};
 use crate::sampling::pcg::{hash2, unit_pair};
 use crate::sampling::{Sampler, SamplerKind};
@@ -240,15 +240,12 @@ fn render_pixel(
             };
             cursors[k] = sampler.cursor();
         }
-        integrator.radiance_batch(
-            scene,
-            &rays[..n],
-            &mut lambdas[..n],
-            &mut cursors[..n],
-            sampler,
-            stats,
-            &mut radiance[..n],
-        );
+        let batch = SampleBatch {
+            rays: &rays[..n],
+            lambdas: &mut lambdas[..n],
+            cursors: &mut cursors[..n],
+        };
+        integrator.radiance_batch(scene, batch, sampler, stats, &mut radiance[..n]);
         for ((l, &weight), lambda) in radiance[..n].iter().zip(&weights).zip(&lambdas) {
             let l = lambda.to_rgb(*l);
             let l = if weight == 1.0 { l } else { l * weight };

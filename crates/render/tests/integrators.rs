@@ -264,9 +264,8 @@ fn spectral_furnace_gives_the_colour_of_le_over_one_minus_rho() {
     use candela_render::spectrum::{integrate_xyz, xyz_to_linear_srgb_f64, Spectrum};
     let le = Spectrum::parse("360:0.2, 450:1.5, 550:0.5, 650:2.0, 830:0.3").unwrap();
     let rho = Spectrum::parse("360:0.1, 480:0.8, 560:0.2, 620:0.7, 830:0.4").unwrap();
-    let expected = xyz_to_linear_srgb_f64(integrate_xyz(|l| {
-        (le.eval(l) / (1.0 - rho.eval(l))) as f64
-    }));
+    let expected =
+        xyz_to_linear_srgb_f64(integrate_xyz(|l| (le.eval(l) / (1.0 - rho.eval(l))) as f64));
     let cases = [
         (
             Texture::spectrum(le.clone(), Rgb::WHITE),
@@ -307,7 +306,11 @@ fn spectral_furnace_gives_the_colour_of_le_over_one_minus_rho() {
         let img = render(&scene, &path, &rs, &|_| {}).image;
         let n = img.pixels().len() as f64;
         for c in 0..3 {
-            let v: Vec<f64> = img.pixels().iter().map(|p| p.to_array()[c] as f64).collect();
+            let v: Vec<f64> = img
+                .pixels()
+                .iter()
+                .map(|p| p.to_array()[c] as f64)
+                .collect();
             let mean = v.iter().sum::<f64>() / n;
             // The pixels' spread estimates one pixel's standard error.
             let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();

@@ -51,19 +51,29 @@ pub trait Integrator: Sync {
     fn radiance_batch(
         &self,
         scene: &Scene,
-        rays: &[Ray],
-        lambdas: &mut [Wavelengths],
-        cursors: &mut [SampleCursor],
+        batch: SampleBatch<'_>,
         sampler: &mut Sampler,
         stats: &mut RayStats,
         out: &mut [SampledSpectrum],
     ) {
-        for (i, ray) in rays.iter().enumerate() {
-            sampler.resume(cursors[i]);
-            out[i] = self.radiance(scene, ray, &mut lambdas[i], sampler, stats);
-            cursors[i] = sampler.cursor();
+        for (i, ray) in batch.rays.iter().enumerate() {
+            sampler.resume(batch.cursors[i]);
+            out[i] = self.radiance(scene, ray, &mut batch.lambdas[i], sampler, stats);
+            batch.cursors[i] = sampler.cursor();
         }
     }
+}
+
+/// Samples of one pixel traced side by side: sample i has the camera ray `rays[i]`, the
+/// wavelengths `lambdas[i]` (left as the path ends them) and its place in the pixel's sample
+/// sequence `cursors[i]` (left at the sample's end).
+pub struct SampleBatch<'a> {
+    /// The camera rays (at most [`crate::math::BATCH`]).
+    pub rays: &'a [Ray],
+    /// What each path's lanes mean.
+    pub lambdas: &'a mut [Wavelengths],
+    /// Where each sample's numbers continue.
+    pub cursors: &'a mut [SampleCursor],
 }
 
 /// Settings that integrators read (each ignores what it does not use).
@@ -125,6 +135,18 @@ impl IntegratorKind {
             OnOff, Flat, Normals, Depth, Local, Direct, Whitted, Path, Radiosity,
         ];
         Self::NAMES.iter().position(|&n| n == name).map(|i| all[i])
+    }
+
+    /// True when the integrator follows radiance per wavelength in spectral renders (see
+    /// [`Integrator::spectral`]): `path`, `direct`, `local`, `whitted`.
+    pub fn spectral(self) -> bool {
+        matches!(
+            self,
+            IntegratorKind::Path
+                | IntegratorKind::Direct
+                | IntegratorKind::Local
+                | IntegratorKind::Whitted
+        )
     }
 
     /// The integrator for `scene`, with what building it reported (a radiosity solve), or why

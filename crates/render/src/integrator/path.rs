@@ -7,12 +7,12 @@
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
 //! (The course's branching estimator is [`super::CoursePath`].)
 
-use super::Integrator;
+use super::{Integrator, SampleBatch};
 use crate::interaction::Hit;
 use crate::math::{Ray, RayBatch, BATCH};
 use crate::sampling::sampler::ONE_MINUS_EPSILON;
 use crate::sampling::warp::power_heuristic;
-use crate::sampling::{SampleCursor, Sampler};
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
@@ -261,13 +261,16 @@ impl Integrator for Path {
     fn radiance_batch(
         &self,
         scene: &Scene,
-        rays: &[Ray],
-        lambdas: &mut [Wavelengths],
-        cursors: &mut [SampleCursor],
+        batch: SampleBatch<'_>,
         sampler: &mut Sampler,
         stats: &mut RayStats,
         out: &mut [SampledSpectrum],
     ) {
+        let SampleBatch {
+            rays,
+            lambdas,
+            cursors,
+        } = batch;
         let n = rays.len();
         debug_assert!(n <= BATCH && cursors.len() == n && out.len() >= n);
         let unused = Ray::new(crate::math::Point3::ORIGIN, crate::math::Vec3::X);

@@ -31,7 +31,6 @@ impl Material {
     /// facing the viewer, `wo` the direction to the viewer, `wi` the direction to the light,
     /// `id`/`is` the light's diffuse and specular intensities at the point, all in the lanes
     /// of `w`.
-    #[allow(clippy::too_many_arguments)]
     pub fn local(
         &self,
         uv: Point2,

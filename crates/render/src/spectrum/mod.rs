@@ -38,8 +38,7 @@ mod wavelengths;
 pub use blackbody::{planck, planck4, planck_peak, planck_unbounded};
 pub use cie::{
     cie_xyz, cie_y, d65, d65_normalized, integrate_xyz, linear_srgb_to_xyz, to_xyz,
-    xyz_to_linear_srgb, xyz_to_linear_srgb_f64,
-    CIE_Y_NORMALIZER,
+    xyz_to_linear_srgb, xyz_to_linear_srgb_f64, CIE_Y_NORMALIZER,
 };
 pub use cie_tables::D65_LUMINANCE;
 pub use data::{RgbRole, Spectrum};

@@ -225,8 +225,8 @@ impl<'t> Props<'t> {
                 match c.children.first() {
                     // Transforms and spectrum plugins (`<spectrum type="…">`) have children.
                     Some(g)
-                        if !matches!(value, Value::Transform(_))
-                            && !(c.tag == "spectrum" && c.attr("type").is_some()) =>
+                        if !(matches!(value, Value::Transform(_))
+                            || (c.tag == "spectrum" && c.attr("type").is_some())) =>
                     {
                         return Err(src.error(
                             g.pos,
