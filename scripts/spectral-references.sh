@@ -3,20 +3,23 @@
 # multijitter, 48×48, 16384 spp, in passes of 256 with different seeds) into
 # crates/cli/tests/data/NAME-mitsuba-spectral.pfm for NAME in spectral-cbox, spectral-blackbody,
 # spectral-metals and the RGB-only glass-mirror-box (examples/mitsuba/NAME.xml, `res` set to 48
-# where the scene has that parameter). Mitsuba comes from the bench's virtual environment
+# where the scene has that parameter), and with VARIANT=llvm_ad_rgb the RGB references
+# NAME-mitsuba-rgb.pfm (spectra converted as Mitsuba's RGB variants do). Mitsuba comes from the bench's virtual environment
 # (../shared/bench/mitsuba-time.sh makes it).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 venv=${CANDELA_BENCH_VENV:-$HOME/.cache/candela-bench/venv}
 export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
 spp=${SPP:-16384}
+variant=${VARIANT:-llvm_ad_spectral}
+suffix=${variant#llvm_ad_}
 for name in "${@:-spectral-cbox spectral-blackbody spectral-metals glass-mirror-box}"; do
   for n in $name; do
-    "$venv/bin/python" - "$root/examples/mitsuba/$n.xml" "$spp" "$root/crates/cli/tests/data/$n-mitsuba-spectral.pfm" <<'PY'
+    "$venv/bin/python" - "$root/examples/mitsuba/$n.xml" "$spp" "$root/crates/cli/tests/data/$n-mitsuba-$suffix.pfm" "$variant" <<'PY'
 import sys
 import mitsuba as mi, numpy as np
-scene_xml, spp, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
-mi.set_variant("llvm_ad_spectral")
+scene_xml, spp, out, variant = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+mi.set_variant(variant)
 try:
     scene = mi.load_file(scene_xml, res=48)
 except Exception:

@@ -7,7 +7,8 @@
 //!   glass-mirror-box.xml, rendered by candela with `spectral: true` from independent seeds, are
 //!   compared with Mitsuba's spectral renders at 16384 spp (tests/data/NAME-mitsuba-spectral.pfm,
 //!   made by scripts/spectral-references.sh): channel means within 1 %, and 4×4-block means
-//!   within candela's own noise.
+//!   within the renders' noise. Rendered in RGB, the spectral scenes match Mitsuba's
+//!   `llvm_ad_rgb` (NAME-mitsuba-rgb.pfm) the same way.
 //! - examples/mitsuba/prism.xml (an SF11 prism whose index is given per wavelength with the
 //!   `<spectrum name="int_ior">` extension, between the camera and a thin white strip): the
 //!   image column where each colour appears is where Snell's law at both faces sends that
@@ -46,6 +47,16 @@ fn load(name: &str, defines: &[(&str, &str)]) -> LoadedScene {
 
 /// Renders `loaded` with the path tracer in spectral mode, `spp` samples from seed `seed`.
 fn render_spectral(loaded: &LoadedScene, size: (usize, usize), spp: u32, seed: u64) -> Image {
+    render_mode(loaded, size, (spp, seed), true)
+}
+
+/// Renders `loaded` with the path tracer, spectrally or in RGB.
+fn render_mode(
+    loaded: &LoadedScene,
+    size: (usize, usize),
+    (spp, seed): (u32, u64),
+    spectral: bool,
+) -> Image {
     let settings = IntegratorSettings {
         max_depth: loaded.hints.max_depth,
         rr_depth: loaded.hints.rr_depth,
@@ -61,7 +72,7 @@ fn render_spectral(loaded: &LoadedScene, size: (usize, usize), spp: u32, seed: u
         spp,
         seed,
         filter: loaded.hints.filter.unwrap_or_default(),
-        spectral: true,
+        spectral,
         ..Default::default()
     };
     render(&loaded.scene, integ.as_ref(), &rs, &|_| {}).image
@@ -71,15 +82,22 @@ fn render_spectral(loaded: &LoadedScene, size: (usize, usize), spp: u32, seed: u
 const RUNS: u64 = 8;
 
 fn matches_mitsuba_spectral(name: &str, defines: &[(&str, &str)], spp: u32) {
+    matches_mitsuba(name, defines, spp, true);
+}
+
+/// Compares candela's renders of `examples/mitsuba/NAME.xml` with Mitsuba's reference
+/// (`llvm_ad_spectral` when `spectral`, else `llvm_ad_rgb`).
+fn matches_mitsuba(name: &str, defines: &[(&str, &str)], spp: u32, spectral: bool) {
     const B: usize = 4;
-    let reference = candela_imageio::read_image(
-        &root().join(format!("crates/cli/tests/data/{name}-mitsuba-spectral.pfm")),
-    )
+    let variant = if spectral { "spectral" } else { "rgb" };
+    let reference = candela_imageio::read_image(&root().join(format!(
+        "crates/cli/tests/data/{name}-mitsuba-{variant}.pfm"
+    )))
     .unwrap();
     let size = (reference.width(), reference.height());
     let loaded = load(name, defines);
     let runs: Vec<Vec<[f64; 3]>> = (0..RUNS)
-        .map(|seed| block_means(&render_spectral(&loaded, size, spp, seed), B))
+        .map(|seed| block_means(&render_mode(&loaded, size, (spp, seed), spectral), B))
         .collect();
     // Student's t, 7 degrees of freedom, two-sided α = 0.002: 4.79; over ~300 block tests a
     // few may fail by chance. The reference has 16384 spp, its noise counts too.
@@ -105,6 +123,13 @@ fn blackbody_lights_match_mitsuba_spectral() {
 #[test]
 fn measured_metals_match_mitsuba_spectral() {
     matches_mitsuba_spectral("spectral-metals", &[], 256);
+}
+
+/// Without `--spectral`, spectra become the colours Mitsuba's RGB variants give them.
+#[test]
+fn spectra_in_rgb_renders_match_mitsuba_rgb() {
+    matches_mitsuba("spectral-cbox", &[], 256, false);
+    matches_mitsuba("spectral-metals", &[], 256, false);
 }
 
 #[test]

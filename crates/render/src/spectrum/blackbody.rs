@@ -13,8 +13,8 @@
 //! (1 to match Mitsuba). (pbrt-v4 instead divides by the peak value, Wien's λ_max = b/T:
 //! [`planck_peak`] gives that factor.)
 //!
-//! For reference, a 6500 K black body has luminance Y ≈ 2.4e4 in these units (its peak
-//! ≈ 2.9e4 W·m⁻²·sr⁻¹·nm⁻¹ at 446 nm).
+//! For reference, a 6500 K black body has luminance Y ≈ 4.2e4 in these units (∫B ȳ dλ / ∫ȳ dλ;
+//! its peak ≈ 4.7e4 W·m⁻²·sr⁻¹·nm⁻¹ at 446 nm).
 
 use super::sampled::SampledSpectrum;
 use super::wavelengths::SampledWavelengths;

@@ -254,6 +254,10 @@ fn collect_ids<'t>(
     Ok(())
 }
 
+/// The linear sRGB colour of a flat (equal-energy) spectrum of value 1, as Mitsuba's RGB
+/// variants convert emitted spectra (it is not white: white is D65).
+const FLAT_SPECTRUM: Rgb = Rgb::new(1.20479, 0.948291, 0.908916);
+
 /// The importer's state while it walks the scene.
 struct Loader<'t> {
     src: SourceFile,
@@ -386,9 +390,15 @@ impl<'t> Loader<'t> {
         let Some(i) = p.item(name) else {
             return Ok((Rgb::splat(default), None));
         };
-        let spectrum = |s: Spectrum| {
-            let rgb = s.to_rgb(role);
-            Ok((rgb, Some(Arc::new(s))))
+        let spectrum = |s: Spectrum| match s {
+            // A flat reflectance is its grey in both modes (its upsampled spectrum is flat).
+            Spectrum::Constant(c) if role != RgbRole::Emission => Ok((Rgb::splat(c), None)),
+            // A flat emitted spectrum: Mitsuba's RGB variants give it the colour of
+            // illuminant E (their own quadrature's value, kept exactly).
+            Spectrum::Constant(c) if role == RgbRole::Emission => {
+                Ok((FLAT_SPECTRUM * c, Some(Arc::new(s))))
+            }
+            s => Ok((s.to_rgb(role), Some(Arc::new(s)))),
         };
         match i.value {
             props::Value::Float(v) => Ok((Rgb::splat(v as f32), None)),

@@ -3,6 +3,7 @@
 //! parameters, which remembers what was read so that the rest can be reported.
 
 use super::math::M4;
+use super::spectra::SpectrumValue;
 use super::xml::{Attr, Element};
 use crate::error::{Pos, SceneError, SourceFile};
 use std::cell::Cell;
@@ -195,7 +196,11 @@ impl<'t> Props<'t> {
                         }
                     }
                 }
-                "spectrum" => super::spectra::spectrum_value(src, c)?,
+                "spectrum" => match super::spectra::spectrum_value(src, c)? {
+                    SpectrumValue::Spectrum(s) => Value::Spectrum(s),
+                    SpectrumValue::File(f, pos) => Value::SpectrumFile(f, pos),
+                    SpectrumValue::Rgb(c) => Value::Rgb(c),
+                },
                 "point" | "vector" => Value::Vector(vector(src, c, 0.0, true)?),
                 "transform" => Value::Transform(transform(src, c, &mut notes)?),
                 "ref" => {

@@ -16,20 +16,29 @@
 //! [`Spectrum::to_rgb`]); in spectral renders it is used as is. A spectrum file is read when
 //! the property is used (its path is resolved like every other file of the scene).
 
-use super::props::Value;
 use super::xml::Element;
-use crate::error::{SceneError, SourceFile};
+use crate::error::{Pos, SceneError, SourceFile};
 use candela_render::spectrum::Spectrum;
 use candela_render::Rgb;
 
 /// The most samples a tabulated spectrum may have (Mitsuba's data files have a few hundred).
 pub(super) const MAX_SPECTRUM_SAMPLES: usize = 100_000;
 
+/// What a `<spectrum>` element gives.
+pub(super) enum SpectrumValue<'t> {
+    /// A spectrum.
+    Spectrum(Spectrum),
+    /// A spectrum file's name (read when the property is used) and its position.
+    File(&'t str, Pos),
+    /// An RGB colour (`type="srgb"`).
+    Rgb([f64; 3]),
+}
+
 /// The value of a `<spectrum>` element `c`.
 pub(super) fn spectrum_value<'t>(
     src: &SourceFile,
     c: &'t Element,
-) -> Result<Value<'t>, SceneError> {
+) -> Result<SpectrumValue<'t>, SceneError> {
     let err = |pos, msg: String| src.error(pos, msg);
     let Some(kind) = c.attr("type") else {
         if let Some(f) = c.attr("filename") {
@@ -39,7 +48,7 @@ pub(super) fn spectrum_value<'t>(
                     "give either 'value' or 'filename', not both".into(),
                 ));
             }
-            return Ok(Value::SpectrumFile(&f.value, f.pos));
+            return Ok(SpectrumValue::File(&f.value, f.pos));
         }
         let a = c.attr("value").ok_or_else(|| {
             err(
@@ -48,7 +57,7 @@ pub(super) fn spectrum_value<'t>(
             )
         })?;
         return parse_text(&a.value)
-            .map(Value::Spectrum)
+            .map(SpectrumValue::Spectrum)
             .map_err(|m| err(a.pos, m));
     };
     // A plugin: its parameters are nested elements.
@@ -95,7 +104,7 @@ pub(super) fn spectrum_value<'t>(
             })
             .collect()
     };
-    let tabulated = |samples: Vec<(f32, f32)>| -> Result<Value<'t>, SceneError> {
+    let tabulated = |samples: Vec<(f32, f32)>| -> Result<SpectrumValue<'t>, SceneError> {
         if samples.len() > MAX_SPECTRUM_SAMPLES {
             return Err(err(
                 c.pos,
@@ -103,11 +112,11 @@ pub(super) fn spectrum_value<'t>(
             ));
         }
         candela_render::spectrum::TabulatedSpectrum::new(samples)
-            .map(|t| Value::Spectrum(Spectrum::Tabulated(t)))
+            .map(|t| SpectrumValue::Spectrum(Spectrum::Tabulated(t)))
             .map_err(|e| err(c.pos, e.message))
     };
     match kind.value.as_str() {
-        "uniform" => Ok(Value::Spectrum(Spectrum::Constant(
+        "uniform" => Ok(SpectrumValue::Spectrum(Spectrum::Constant(
             number("value", Some(1.0))? as f32,
         ))),
         "blackbody" => {
@@ -119,7 +128,7 @@ pub(super) fn spectrum_value<'t>(
                 ));
             }
             let scale = number("scale", Some(1.0))?;
-            Ok(Value::Spectrum(Spectrum::blackbody(t as f32, scale as f32)))
+            Ok(SpectrumValue::Spectrum(Spectrum::blackbody(t as f32, scale as f32)))
         }
         "regular" => {
             let (lo, hi) = (
@@ -163,7 +172,7 @@ pub(super) fn spectrum_value<'t>(
         }
         "d65" => {
             let scale = number("scale", Some(1.0))? as f32;
-            Ok(Value::Spectrum(Spectrum::rgb_illuminant(Rgb::splat(scale))))
+            Ok(SpectrumValue::Spectrum(Spectrum::rgb_illuminant(Rgb::splat(scale))))
         }
         "srgb" => {
             let e = param("color")
@@ -179,8 +188,8 @@ pub(super) fn spectrum_value<'t>(
                 .collect::<Option<_>>()
                 .ok_or_else(|| err(a.pos, format!("'{}' is not a colour", a.value)))?;
             match v.as_slice() {
-                [g] => Ok(Value::Rgb([*g; 3])),
-                [r, g, b] => Ok(Value::Rgb([*r, *g, *b])),
+                [g] => Ok(SpectrumValue::Rgb([*g; 3])),
+                [r, g, b] => Ok(SpectrumValue::Rgb([*r, *g, *b])),
                 _ => Err(err(a.pos, "a colour has one or three values".into())),
             }
         }
