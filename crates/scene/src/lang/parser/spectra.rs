@@ -3,6 +3,7 @@
 //! `cauchy(A, B)`, `spectrum(λ:n, …)`) and the named metals of `metal("name", …)`.
 
 use super::{Args, PResult, Parser};
+use crate::error::Pos;
 use crate::lang::ast::*;
 use crate::lang::lexer::TokenKind;
 use candela_render::material::REFERENCE_WAVELENGTH;
@@ -97,7 +98,7 @@ impl Parser<'_> {
     fn samples(
         &mut self,
         a: &mut Args,
-        pos: crate::error::Pos,
+        pos: Pos,
         ok: fn(f32) -> bool,
         message: &str,
     ) -> PResult<TabulatedSpectrum> {
