@@ -1,9 +1,17 @@
 //! Builds a render scene from a scene description of the candela language, validating what the
 //! parser could not (files, singular transformations, unbounded polyhedra, CSG operands), each
 //! error at its source position.
+//!
+//! Spectra become [`Texture::Spectral`] textures (and the `spectrum` of point, spot and distant
+//! lights) whose RGB colour is [`Spectrum::to_rgb`] in the role of the place they are used:
+//! [`RgbRole::Reflectance`] for the pigments of BRDFs, [`RgbRole::Emission`] for emissions,
+//! lights and the environment, [`RgbRole::OpticalConstant`] for a metal's measured η and k.
 
 use crate::error::{Pos, SceneError};
-use crate::lang::ast::{self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind};
+use crate::lang::ast::{
+    self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind, SpectrumDef,
+    MAX_SPECTRUM_SAMPLES,
+};
 use crate::loaded::{check_mesh_memory, MAX_CSG_NODES, MAX_SHAPES};
 use candela_imageio::Limits;
 use candela_render::accel::AccelKind;
@@ -13,13 +21,16 @@ use candela_render::light::{
     Components, DistantLight, Environment, Falloff, HemisphereLight, Light, PointLight, SpotLight,
     SpotProfile,
 };
-use candela_render::material::{Distribution, Lobe, Material, MaterialId, Microfacet, Model};
+use candela_render::material::{
+    Dispersion, Distribution, Lobe, Material, MaterialId, Microfacet, Model,
+};
 use candela_render::math::{Transform, Vec3};
 use candela_render::scene::SceneBuilder;
 use candela_render::shape::{
     Csg, CsgNode, CsgOp, Cube, Cylinder, Mesh, Parallelogram, Plane, Polygon, PolygonError,
     Polyhedron, Shape, Solid, Sphere,
 };
+use candela_render::spectrum::{metal, RgbRole, Spectrum};
 use candela_render::texture::{ImageTexture, Texture};
 use candela_render::{Rgb, Scene};
 use std::collections::HashMap;
@@ -37,7 +48,7 @@ pub struct BuildReport {
     pub bytes_per_triangle: Option<f64>,
     /// Positions of `ambient_light`s and `components(…)`: terms of the local model only.
     pub local_model_terms: Vec<String>,
-    /// The files read (meshes and images).
+    /// The files read (meshes, images and spectra).
     pub inputs: Vec<PathBuf>,
 }
 
@@ -54,6 +65,7 @@ pub fn build_scene(
         scene: SceneBuilder::new(),
         materials: Vec::new(),
         images: HashMap::new(),
+        spectra: HashMap::new(),
         meshes: HashMap::new(),
         report: BuildReport::default(),
         mesh_bytes: 0.0,
@@ -79,6 +91,8 @@ struct Builder<'a> {
     /// Material index of the description → render material and emission.
     materials: Vec<(MaterialId, Option<u32>)>,
     images: HashMap<PathBuf, Arc<candela_render::Image>>,
+    /// Spectrum files read so far.
+    spectra: HashMap<PathBuf, Arc<Spectrum>>,
     meshes: HashMap<PathBuf, Arc<Mesh>>,
     report: BuildReport,
     mesh_bytes: f64,
@@ -92,8 +106,73 @@ impl Builder<'_> {
         self.desc.error(pos, msg)
     }
 
-    fn texture(&mut self, p: &ast::Pigment) -> Result<Texture, SceneError> {
+    /// The spectrum `def` names (reading a file the first time it is named), with its colour
+    /// in `role`; `pos` is where it is written.
+    fn spectrum(
+        &mut self,
+        def: &SpectrumDef,
+        role: RgbRole,
+        pos: Pos,
+    ) -> Result<(Arc<Spectrum>, Rgb), SceneError> {
+        let spectrum = match def {
+            SpectrumDef::Inline(s) => Arc::new(s.clone()),
+            SpectrumDef::File(file) => self.spectrum_file(file)?,
+        };
+        let rgb = spectrum.to_rgb(role);
+        if !rgb.is_finite() {
+            return Err(self.err(
+                pos,
+                "the spectrum's values are too large (its colour is not finite)",
+            ));
+        }
+        Ok((spectrum, rgb))
+    }
+
+    /// The spectrum file `file` names: `λ value` lines (`#` comments), checked like an inline
+    /// spectrum.
+    fn spectrum_file(&mut self, file: &ast::FileRef) -> Result<Arc<Spectrum>, SceneError> {
+        let path = self.locate(file, "spectrum")?;
+        if let Some(s) = self.spectra.get(&path) {
+            return Ok(s.clone());
+        }
+        let name = &file.name;
+        let bytes = candela_imageio::input::read_file(&path, self.limits.max_file_bytes)
+            .map_err(|e| self.err(file.pos, format!("cannot read spectrum '{name}': {e}")))?;
+        crate::inputs::record(&path);
+        self.report.inputs.push(path.clone());
+        let text = String::from_utf8(bytes)
+            .map_err(|_| self.err(file.pos, format!("spectrum '{name}' is not UTF-8 text")))?;
+        let spectrum = Spectrum::parse_spd(&text).map_err(|e| {
+            let at = e.line.map(|l| format!(" (line {l})")).unwrap_or_default();
+            self.err(file.pos, format!("spectrum '{name}'{at}: {}", e.message))
+        })?;
+        if let Spectrum::Tabulated(t) = &spectrum {
+            let samples = t.samples();
+            if samples.len() > MAX_SPECTRUM_SAMPLES {
+                return Err(self.err(
+                    file.pos,
+                    format!("spectrum '{name}' has more than {MAX_SPECTRUM_SAMPLES} samples"),
+                ));
+            }
+            if let Some(&(l, v)) = samples.iter().find(|(l, v)| !(*l > 0.0 && *v >= 0.0)) {
+                return Err(self.err(
+                    file.pos,
+                    format!("spectrum '{name}': the sample {l}:{v} is not a positive wavelength with a non-negative value"),
+                ));
+            }
+        }
+        let spectrum = Arc::new(spectrum);
+        self.spectra.insert(path, spectrum.clone());
+        Ok(spectrum)
+    }
+
+    /// The texture of the pigment `p` (spectra converted to RGB in `role`).
+    fn texture(&mut self, p: &ast::Pigment, role: RgbRole) -> Result<Texture, SceneError> {
         Ok(match &p.kind {
+            PigmentKind::Spectrum(def) => {
+                let (spectrum, rgb) = self.spectrum(def, role, p.pos)?;
+                Texture::Spectral { rgb, spectrum }
+            }
             PigmentKind::Uniform(c) => Texture::Uniform(*c),
             PigmentKind::Checkered {
                 color1,
@@ -147,10 +226,10 @@ impl Builder<'_> {
         for m in &self.desc.materials {
             let model = match &m.brdf.kind {
                 BrdfKind::Diffuse { kd } => Model::Diffuse {
-                    reflectance: self.texture(kd)?,
+                    reflectance: self.texture(kd, RgbRole::Reflectance)?,
                 },
                 BrdfKind::Specular { ks } => Model::Specular {
-                    reflectance: self.texture(ks)?,
+                    reflectance: self.texture(ks, RgbRole::Reflectance)?,
                 },
                 BrdfKind::Phong { kd, ks, exponent }
                 | BrdfKind::BlinnPhong { kd, ks, exponent } => Model::Phong {
@@ -159,8 +238,8 @@ impl Builder<'_> {
                     } else {
                         Lobe::BlinnPhong
                     },
-                    kd: self.texture(kd)?,
-                    ks: self.texture(ks)?,
+                    kd: self.texture(kd, RgbRole::Reflectance)?,
+                    ks: self.texture(ks, RgbRole::Reflectance)?,
                     n: exponent.max(0.0),
                 },
                 BrdfKind::CookTorrance {
@@ -170,18 +249,16 @@ impl Builder<'_> {
                     ior,
                     distribution,
                 } => Model::CookTorrance {
-                    kd: self.texture(kd)?,
-                    ks: self.texture(ks)?,
-                    mf: Microfacet::new(
-                        match distribution {
-                            ast::Distribution::Beckmann => Distribution::Beckmann,
-                            ast::Distribution::Ggx => Distribution::Ggx,
-                        },
-                        *roughness,
-                    ),
+                    kd: self.texture(kd, RgbRole::Reflectance)?,
+                    ks: self.texture(ks, RgbRole::Reflectance)?,
+                    mf: Microfacet::new((*distribution).into(), *roughness),
                     ior: *ior,
                 },
-                BrdfKind::Glass { ior, kt } => {
+                BrdfKind::Glass {
+                    ior,
+                    kt,
+                    dispersion,
+                } => {
                     if !(*ior > 0.0) {
                         return Err(self.err(
                             m.brdf.pos,
@@ -190,10 +267,33 @@ impl Builder<'_> {
                     }
                     Model::Dielectric {
                         eta: *ior,
-                        dispersion: None,
+                        dispersion: dispersion.as_ref().map(|interior| {
+                            Box::new(Dispersion {
+                                interior: interior.clone(),
+                                exterior: 1.0,
+                            })
+                        }),
                         reflectance: Texture::Uniform(Rgb::WHITE),
-                        transmittance: self.texture(kt)?,
+                        transmittance: self.texture(kt, RgbRole::Reflectance)?,
                         mf: None,
+                    }
+                }
+                BrdfKind::Metal {
+                    name,
+                    roughness,
+                    distribution,
+                } => {
+                    let (eta, k) = metal(name)
+                        .ok_or_else(|| self.err(m.brdf.pos, format!("unknown metal '{name}'")))?;
+                    let measured = |s: Spectrum| {
+                        let rgb = s.to_rgb(RgbRole::OpticalConstant);
+                        Texture::spectrum(s, rgb)
+                    };
+                    Model::Conductor {
+                        eta_k: Some((measured(eta), measured(k))),
+                        reflectance: Texture::Uniform(Rgb::WHITE),
+                        mf: (*roughness > 0.0)
+                            .then(|| Microfacet::new((*distribution).into(), *roughness)),
                     }
                 }
             };
@@ -201,7 +301,7 @@ impl Builder<'_> {
             let emission = match &m.emission.kind {
                 PigmentKind::Uniform(c) if c.is_black() => None,
                 _ => {
-                    let radiance = self.texture(&m.emission)?;
+                    let radiance = self.texture(&m.emission, RgbRole::Emission)?;
                     Some(self.scene.add_emission(Emission {
                         radiance,
                         two_sided: true,
@@ -232,14 +332,27 @@ impl Builder<'_> {
     }
 
     fn lights(&mut self) -> Result<(), SceneError> {
-        let here = |pos: Pos| format!("{}:{pos}", self.desc.source.path.display());
+        let desc = self.desc;
+        let here = |pos: Pos| format!("{}:{pos}", desc.source.path.display());
         for l in &self.desc.lights {
             if l.components.is_some() {
                 self.report
                     .local_model_terms
                     .push(format!("{}: components(…)", here(l.pos)));
             }
-            let c = l.local_components();
+            // A spectrum's colour (for RGB renders and the local model's default components).
+            let (intensity, spectrum) = match &l.spectrum {
+                Some(def) => {
+                    let (s, rgb) = self.spectrum(def, RgbRole::Emission, l.pos)?;
+                    (rgb, Some(s))
+                }
+                None => (l.intensity(), None),
+            };
+            let c = l.components.unwrap_or(ast::Components {
+                ambient: Rgb::BLACK,
+                diffuse: intensity,
+                specular: intensity,
+            });
             let components = Components {
                 ambient: c.ambient,
                 diffuse: c.diffuse,
@@ -259,14 +372,14 @@ impl Builder<'_> {
             let light = match &l.kind {
                 LightKind::Point {
                     position,
-                    intensity,
                     radius,
                     attenuation,
+                    ..
                 } => Light::Point(
                     PointLight {
                         position: *position,
-                        intensity: *intensity,
-                        spectrum: None,
+                        intensity,
+                        spectrum,
                         falloff: Falloff {
                             radius: *radius,
                             attenuation: att(attenuation),
@@ -277,16 +390,16 @@ impl Builder<'_> {
                 LightKind::Spot {
                     position,
                     direction,
-                    intensity,
                     cutoff_deg,
                     exponent,
                     attenuation,
+                    ..
                 } => Light::Spot(
                     SpotLight {
                         position: *position,
                         axis: unit(*direction, "spot direction")?,
-                        intensity: *intensity,
-                        spectrum: None,
+                        intensity,
+                        spectrum,
                         cos_cutoff: cutoff_deg.to_radians().cos(),
                         profile: SpotProfile::Power(*exponent),
                         falloff: Falloff {
@@ -297,20 +410,17 @@ impl Builder<'_> {
                     },
                     components,
                 ),
-                LightKind::Distant {
-                    direction,
-                    intensity,
-                } => Light::Distant(
+                LightKind::Distant { direction, .. } => Light::Distant(
                     DistantLight {
                         direction: unit(*direction, "light direction")?,
-                        irradiance: *intensity,
-                        spectrum: None,
+                        irradiance: intensity,
+                        spectrum,
                     },
                     components,
                 ),
-                LightKind::Hemisphere { intensity, up } => Light::Hemisphere(
+                LightKind::Hemisphere { up, .. } => Light::Hemisphere(
                     HemisphereLight {
-                        radiance: *intensity,
+                        radiance: intensity,
                         up: unit(*up, "up direction")?,
                     },
                     components,
@@ -325,7 +435,7 @@ impl Builder<'_> {
             self.scene.add_ambient(a.intensity);
         }
         for e in &self.desc.environments {
-            let tex = self.texture(&e.pigment)?;
+            let tex = self.texture(&e.pigment, RgbRole::Emission)?;
             let t = self.check_transform(&e.transform, e.pos)?;
             self.scene
                 .add_light(Light::Environment(Environment::new(tex, t)));
@@ -657,6 +767,15 @@ impl Builder<'_> {
                 shape.pos,
                 "CSG operands must be solids (sphere, box, polyhedron, closed mesh or CSG); planes, triangles, parallelograms, polygons and (open) cylinders enclose no volume",
             )),
+        }
+    }
+}
+
+impl From<ast::Distribution> for Distribution {
+    fn from(d: ast::Distribution) -> Self {
+        match d {
+            ast::Distribution::Beckmann => Distribution::Beckmann,
+            ast::Distribution::Ggx => Distribution::Ggx,
         }
     }
 }

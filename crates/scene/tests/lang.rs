@@ -231,11 +231,11 @@ const ACCEPTED: &[(&str, Check)] = &[
             distribution: Distribution::Ggx, .. }));
     }),
     ("material g(glass(1.5))", |d| {
-        let BrdfKind::Glass { ior, kt } = &d.materials[1].brdf.kind else { panic!() };
+        let BrdfKind::Glass { ior, kt, dispersion: None } = &d.materials[1].brdf.kind else { panic!() };
         assert_eq!((*ior, uniform(kt)), (1.5, Rgb::WHITE));
     }),
     ("material g(glass(1.33, <0.9, 0.9, 1>), <0, 0, 0>)", |d| {
-        let BrdfKind::Glass { ior, kt } = &d.materials[1].brdf.kind else { panic!() };
+        let BrdfKind::Glass { ior, kt, dispersion: None } = &d.materials[1].brdf.kind else { panic!() };
         assert_eq!((*ior, uniform(kt)), (1.33, rgb(0.9, 0.9, 1.0)));
     }),
     ("material sphere(diffuse(<1, 1, 1>)) material glass(specular(<1, 1, 1>)) box(glass, identity)", |d| {

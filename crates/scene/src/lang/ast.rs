@@ -14,10 +14,17 @@
 //!   positive, finite length, so they can be normalised (they are kept as written);
 //! - indices of refraction, roughness, camera aspect ratio and perspective distance are
 //!   positive; exponents, attenuation coefficients are not negative; a spot cutoff is in
-//!   (0°, 180°]; a checkered pigment has at least one step.
+//!   (0°, 180°]; a checkered pigment has at least one step;
+//! - an inline spectrum has 2 to [`MAX_SPECTRUM_SAMPLES`] samples with positive, strictly
+//!   increasing wavelengths; a blackbody has a positive temperature and a non-negative scale,
+//!   and its colour is finite; a blackbody is never a reflectance (only an emission, a light or
+//!   the environment);
+//! - a metal's name is one of [`metal_names`](candela_render::spectrum::metal_names), its
+//!   roughness is not negative; a dispersive glass's index is positive over the visible range.
 
 use crate::error::{Pos, SceneError, SourceFile};
 use candela_render::math::{Point3, Transform, Vec3};
+use candela_render::spectrum::{Ior, Spectrum};
 use candela_render::Rgb;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -172,11 +179,37 @@ pub enum BrdfKind {
     },
     /// `glass(ior [, kt])`: a smooth dielectric.
     Glass {
-        /// The index of refraction (> 0).
+        /// The index of refraction (> 0); for a dispersive glass, its index at the reference
+        /// wavelength 587.56 nm (the one RGB renders use).
         ior: f32,
         /// The transmittance (default white).
         kt: Pigment,
+        /// The index as a function of the wavelength when it varies (`sellmeier("…")`,
+        /// `cauchy(A, B)`, `spectrum(λ:n, …)`); `None` for a number (or a constant spectrum).
+        dispersion: Option<Ior>,
     },
+    /// `metal("name" [, roughness [, distribution]])`: a conductor with measured optical
+    /// constants.
+    Metal {
+        /// The name, one of [`metal_names`](candela_render::spectrum::metal_names).
+        name: String,
+        /// The microfacet roughness α (≥ 0; 0 is a smooth mirror).
+        roughness: f32,
+        /// The microfacet distribution (default GGX).
+        distribution: Distribution,
+    },
+}
+
+/// The most samples a spectrum may have (inline or in a file).
+pub const MAX_SPECTRUM_SAMPLES: usize = 100_000;
+
+/// A spectrum written in the scene (a pigment or a light's colour).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpectrumDef {
+    /// `spectrum(λ:v, …)` (tabulated) or `blackbody(T [, scale])`.
+    Inline(Spectrum),
+    /// `spectrum("file")`: a file of `λ value` lines, read when the scene is built.
+    File(FileRef),
 }
 
 /// A microfacet distribution of [`BrdfKind::CookTorrance`].
@@ -214,6 +247,9 @@ pub enum PigmentKind {
     },
     /// `image("file")`: the nearest pixel (PFM, PNG or EXR; a lat-long map for `environment`).
     Image(FileRef),
+    /// `spectrum(…)` or `blackbody(…)`: a spectrum, the same everywhere (in RGB renders its
+    /// RGB conversion in the pigment's role).
+    Spectrum(SpectrumDef),
 }
 
 /// A file named in the scene.
@@ -259,6 +295,11 @@ pub struct Light {
     pub kind: LightKind,
     /// The optional `components(<Ia>, <Id>, <Is>)` of the local model.
     pub components: Option<Components>,
+    /// The spectrum when the intensity is written as `spectrum(…)` or `blackbody(…)`
+    /// (point, spot and distant lights). The kind's intensity is then the spectrum's RGB
+    /// emission conversion for an inline spectrum, and black for a file (the builder converts
+    /// it once it has read the file).
+    pub spectrum: Option<SpectrumDef>,
     /// The position of the keyword.
     pub pos: Pos,
 }

@@ -7,8 +7,9 @@
 //!   optional decimal point (`2`, `2.`, `.5`, `2.5`) and an optional exponent (`1e-5`,
 //!   `2.5E+3`). Numbers must fit in an `f32` (`1e999` is an error).
 //! - Strings: `"…"` on one line, without escapes.
-//! - Symbols: `( ) [ ] < > , *` and a `-` or `+` that does not start a number (the unary minus
-//!   in front of a variable: `-clock`).
+//! - Symbols: `( ) [ ] < > , * / :` and a `-` or `+` that does not start a number (the unary
+//!   minus in front of a variable: `-clock`); `:` separates a wavelength from its value in
+//!   `spectrum(400:0.2, …)`.
 
 use crate::error::{Pos, SceneError, SourceFile};
 use std::fmt;
@@ -24,7 +25,7 @@ pub enum TokenKind {
     Number(f32),
     /// A string literal, without the quotes.
     Str(String),
-    /// One of `( ) [ ] < > , * - +`.
+    /// One of `( ) [ ] < > , * / : - +`.
     Symbol(char),
     /// The end of the text.
     Eof,
@@ -75,7 +76,7 @@ impl fmt::Display for Token {
 }
 
 /// The symbols that form a token by themselves.
-const SYMBOLS: &str = "()[]<>,*-+/";
+const SYMBOLS: &str = "()[]<>,*-+/:";
 
 /// A lexer over a source text, producing tokens one at a time.
 pub struct Lexer<'a> {

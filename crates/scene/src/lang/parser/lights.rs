@@ -75,12 +75,14 @@ impl Parser<'_> {
         };
         let exponent =
             |p: &mut Self| p.checked_number(|x| x >= 0.0, "the exponent must not be negative");
+        let mut spectrum = None;
         let (kind, components) = match word {
             "point_light" => self.args(
-                "point_light([position], <r, g, b>, radius [, attenuation(c1, c2, c3)] [, components(<Ia>, <Id>, <Is>)])",
+                "point_light([position], <r, g, b> | spectrum, radius [, attenuation(c1, c2, c3)] [, components(<Ia>, <Id>, <Is>)])",
                 |p, a| {
                     let position = p.arg(a, Self::point)?;
-                    let intensity = p.arg(a, Self::color)?;
+                    let (intensity, s) = p.arg(a, Self::light_colour)?;
+                    spectrum = s;
                     let radius = p.arg(a, Self::number)?;
                     let (attenuation, components) = p.light_options(a, true)?;
                     let kind = LightKind::Point { position, intensity, radius, attenuation };
@@ -88,11 +90,12 @@ impl Parser<'_> {
                 },
             )?,
             "spot_light" => self.args(
-                "spot_light([position], [direction], <r, g, b>, cutoff_degrees, exponent [, attenuation(c1, c2, c3)] [, components(<Ia>, <Id>, <Is>)])",
+                "spot_light([position], [direction], <r, g, b> | spectrum, cutoff_degrees, exponent [, attenuation(c1, c2, c3)] [, components(<Ia>, <Id>, <Is>)])",
                 |p, a| {
                     let position = p.arg(a, Self::point)?;
                     let direction = p.arg(a, Self::direction)?;
-                    let intensity = p.arg(a, Self::color)?;
+                    let (intensity, s) = p.arg(a, Self::light_colour)?;
+                    spectrum = s;
                     let cutoff_deg = p.arg(a, cutoff)?;
                     let exponent = p.arg(a, exponent)?;
                     let (attenuation, components) = p.light_options(a, true)?;
@@ -108,10 +111,11 @@ impl Parser<'_> {
                 },
             )?,
             "distant_light" => self.args(
-                "distant_light([direction], <r, g, b> [, components(<Ia>, <Id>, <Is>)])",
+                "distant_light([direction], <r, g, b> | spectrum [, components(<Ia>, <Id>, <Is>)])",
                 |p, a| {
                     let direction = p.arg(a, Self::direction)?;
-                    let intensity = p.arg(a, Self::color)?;
+                    let (intensity, s) = p.arg(a, Self::light_colour)?;
+                    spectrum = s;
                     let (_, components) = p.light_options(a, false)?;
                     Ok((LightKind::Distant { direction, intensity }, components))
                 },
@@ -119,6 +123,12 @@ impl Parser<'_> {
             _ => self.args(
                 "hemisphere_light(<r, g, b> [, [up]] [, components(<Ia>, <Id>, <Is>)])",
                 |p, a| {
+                    if p.at_spectrum() {
+                        return Err(p.error(
+                            p.tok.pos,
+                            "hemisphere_light takes an RGB colour '<r, g, b>' (spectra are for point, spot and distant lights, emissions and the environment)",
+                        ));
+                    }
                     let intensity = p.arg(a, Self::color)?;
                     let mut up = Vec3::Z;
                     if p.more(a)? && p.tok.is_symbol('[') {
@@ -132,6 +142,7 @@ impl Parser<'_> {
         Ok(Light {
             kind,
             components,
+            spectrum,
             pos,
         })
     }

@@ -1,9 +1,10 @@
-//! Materials: pigments (uniform, checkered, image), BRDFs and their microfacet distributions,
-//! and references to named materials.
+//! Materials: pigments (uniform, checkered, image, spectra), BRDFs and their microfacet
+//! distributions, and references to named materials.
 
 use super::{PResult, Parser};
 use crate::lang::ast::*;
 use crate::lang::lexer::TokenKind;
+use candela_render::spectrum::Spectrum;
 use candela_render::Rgb;
 
 impl Parser<'_> {
@@ -38,10 +39,24 @@ impl Parser<'_> {
                     self.advance()?;
                     PigmentKind::Image(self.args("image(\"file\")", |p, a| p.arg(a, Self::file))?)
                 }
+                Some("spectrum" | "blackbody") => PigmentKind::Spectrum(self.spectrum_def()?),
                 _ => return Err(self.unexpected("a pigment")),
             }
         };
         Ok(Pigment { kind, pos })
+    }
+
+    /// A pigment of a BRDF (a reflectance or transmittance): any pigment but a blackbody.
+    pub(super) fn reflectance(&mut self) -> PResult<Pigment> {
+        let pigment = self.pigment()?;
+        if let PigmentKind::Spectrum(SpectrumDef::Inline(Spectrum::Blackbody { .. })) = pigment.kind
+        {
+            return Err(self.error(
+                pigment.pos,
+                "a blackbody is an emission, not a reflectance: use it for a material's emission, a light or the environment",
+            ));
+        }
+        Ok(pigment)
     }
 
     pub(super) fn brdf(&mut self) -> PResult<Brdf> {
@@ -60,7 +75,7 @@ impl Parser<'_> {
                 } else {
                     "specular(pigment)"
                 };
-                let pigment = self.args(syntax, |p, a| p.arg(a, Self::pigment))?;
+                let pigment = self.args(syntax, |p, a| p.arg(a, Self::reflectance))?;
                 if word == "diffuse" {
                     BrdfKind::Diffuse { kd: pigment }
                 } else {
@@ -76,8 +91,8 @@ impl Parser<'_> {
                 };
                 let (kd, ks, exponent) = self.args(syntax, |p, a| {
                     Ok((
-                        p.arg(a, Self::pigment)?,
-                        p.arg(a, Self::pigment)?,
+                        p.arg(a, Self::reflectance)?,
+                        p.arg(a, Self::reflectance)?,
                         p.arg(a, exponent)?,
                     ))
                 })?;
@@ -92,8 +107,8 @@ impl Parser<'_> {
                 self.args(
                     "cook_torrance(kd, ks, roughness [, ior [, \"beckmann\"|\"ggx\"]])",
                     |p, a| {
-                        let kd = p.arg(a, Self::pigment)?;
-                        let ks = p.arg(a, Self::pigment)?;
+                        let kd = p.arg(a, Self::reflectance)?;
+                        let ks = p.arg(a, Self::reflectance)?;
                         let roughness = p.arg(a, positive("the roughness"))?;
                         let mut ior = 1.5;
                         let mut distribution = Distribution::Ggx;
@@ -116,17 +131,25 @@ impl Parser<'_> {
             "glass" => {
                 self.advance()?;
                 self.args("glass(ior [, kt])", |p, a| {
-                    let ior = p.arg(a, positive("the index of refraction"))?;
+                    let (ior, dispersion) = p.arg(a, Self::glass_ior)?;
                     let kt = if p.more(a)? {
-                        p.arg(a, Self::pigment)?
+                        p.arg(a, Self::reflectance)?
                     } else {
                         Pigment {
                             kind: PigmentKind::Uniform(Rgb::WHITE),
                             pos,
                         }
                     };
-                    Ok(BrdfKind::Glass { ior, kt })
+                    Ok(BrdfKind::Glass {
+                        ior,
+                        kt,
+                        dispersion,
+                    })
                 })?
+            }
+            "metal" => {
+                self.advance()?;
+                self.metal()?
             }
             _ => return Err(self.unexpected("a BRDF")),
         };

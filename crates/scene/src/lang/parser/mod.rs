@@ -11,6 +11,7 @@
 mod lights;
 mod materials;
 mod shapes;
+mod spectra;
 mod values;
 
 use super::ast::*;
