@@ -64,7 +64,7 @@ pub fn max_memory(option: Option<u64>) -> u64 {
 }
 
 /// The process's address-space limit (`RLIMIT_AS`), read from `/proc/self/limits`.
-fn address_space_limit() -> Option<u64> {
+pub fn address_space_limit() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/self/limits").ok()?;
     let line = text.lines().find(|l| l.starts_with("Max address space"))?;
     line.split_whitespace().nth(3)?.parse().ok()

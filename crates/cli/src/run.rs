@@ -411,10 +411,7 @@ fn render_frame(
         radiosity_outcome(outcome, args)?;
     }
     let integrator = &built.integrator;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0) as usize)
-        .build()
-        .context("--threads: cannot start the worker threads")?;
+    let pool = worker_pool(args.threads)?;
 
     let per_sample = window.pixels() as u64;
     let progress = Progress::new(
@@ -579,4 +576,37 @@ fn render_frame(
         );
     }
     Ok(())
+}
+
+/// The worker threads: `threads` (default: one per core), or as many as the system lets start
+/// (a tight address-space or process limit), with a warning; the image does not depend on the
+/// count. An error only when not even one starts.
+fn worker_pool(threads: Option<u32>) -> Result<rayon::ThreadPool> {
+    let wanted = match threads {
+        Some(n) => n as usize,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    // Under an address-space limit (`ulimit -v`) each thread's stack and malloc arena take
+    // room (a 64 MiB arena each, reserved): at most one thread per 128 MiB of it.
+    let room =
+        crate::inputs::address_space_limit().map_or(usize::MAX, |l| (l >> 27).max(1) as usize);
+    let mut n = wanted.clamp(1, room);
+    loop {
+        match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+            Ok(pool) => {
+                if n < wanted {
+                    crate::exit::eprint_line(format_args!(
+                        "candela: warning: --threads: only {n} of {wanted} worker threads could start (system limits); the image is the same"
+                    ));
+                }
+                return Ok(pool);
+            }
+            Err(e) if n == 1 => {
+                return Err(anyhow::anyhow!(
+                    "--threads: cannot start a worker thread: {e}"
+                ))
+            }
+            Err(_) => n /= 2,
+        }
+    }
 }
