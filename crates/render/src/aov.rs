@@ -229,7 +229,7 @@ pub fn aov_sample(scene: &Scene, ray: &Ray, set: AovSet, out: &mut [f32], stats:
             Aov::Depth => &[(first.p - ray.o).norm()],
             Aov::Position => &[first.p.x, first.p.y, first.p.z],
             Aov::Uv => &[first.uv.x, first.uv.y],
-            Aov::Shape => &[scene.geometry.shape_index(first.prim) as f32],
+            Aov::Shape => &[scene.shape_index(&first) as f32],
             // The antialiased emission starts as the sample's own (the caller refines it at
             // the edges of lights).
             Aov::Emission | Aov::EmissionAa => &{

@@ -38,6 +38,9 @@ pub struct Hit {
     pub sub: u32,
     /// For CSG: the leaf hit.
     pub leaf: u32,
+    /// In an instance (`prim` is then the instance's id): the primitive hit in the shared
+    /// geometry of its group; 0 otherwise.
+    pub inner: u32,
 }
 
 impl Hit {
@@ -67,6 +70,8 @@ pub struct SurfaceInteraction {
     pub t: f32,
     /// The primitive hit.
     pub prim: u32,
+    /// In an instance: the primitive hit in its group's geometry (see [`Hit::inner`]).
+    pub inner: u32,
     /// Material, emission and light of the surface.
     pub props: SurfaceProps,
     /// The shading frame when the shape has it ready (flat shapes keep one per face); `None`:

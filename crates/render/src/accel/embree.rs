@@ -297,6 +297,7 @@ impl Embree {
                     uv: [rh.hit.u, rh.hit.v],
                     sub: 0,
                     leaf: 0,
+                    inner: 0,
                 },
             );
         }
