@@ -260,3 +260,349 @@ fn build(items: &mut [(Bounds3, Point3, u32)], offset: u32, nodes: &mut Vec<Node
     nodes[me].count = 0;
     nodes[me].axis = axis as u8;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Material;
+    use crate::math::{Normal3, Point2, RayBatch, Transform, BATCH};
+    use crate::sampling::Pcg32;
+    use crate::scene::{GroupError, Scene, SceneBuilder};
+    use crate::shape::{Mesh, Shape, Sphere};
+    use crate::texture::Texture;
+    use crate::Rgb;
+
+    const KINDS: [AccelKind; 5] = [
+        AccelKind::Bvh,
+        AccelKind::None,
+        AccelKind::KdTree,
+        AccelKind::Grid,
+        AccelKind::Octree,
+    ];
+
+    /// A closed octahedron of radius 1 with uv per vertex and flat normals.
+    fn octahedron(material: u32) -> Mesh {
+        let p = |x, y, z| Point3::new(x, y, z);
+        let mut m = Mesh {
+            positions: vec![
+                p(1.0, 0.0, 0.0),
+                p(-1.0, 0.0, 0.0),
+                p(0.0, 1.0, 0.0),
+                p(0.0, -1.0, 0.0),
+                p(0.0, 0.0, 1.0),
+                p(0.0, 0.0, -1.0),
+            ],
+            indices: vec![
+                [0, 2, 4],
+                [2, 1, 4],
+                [1, 3, 4],
+                [3, 0, 4],
+                [2, 0, 5],
+                [1, 2, 5],
+                [3, 1, 5],
+                [0, 3, 5],
+            ],
+            ..Default::default()
+        };
+        m.uvs = m
+            .positions
+            .iter()
+            .map(|q| Point2::new(0.5 + 0.5 * q.x, 0.5 + 0.5 * q.y))
+            .collect();
+        m.props.material = material;
+        m
+    }
+
+    /// A random placement: rotation, non-uniform scaling, translation.
+    fn placement(rng: &mut Pcg32) -> Transform {
+        let mut f = || rng.next_f32();
+        let axis = Vec3::new(f() - 0.5, f() - 0.5, f() - 0.5 + 1e-3);
+        Transform::translation(Vec3::new(f() * 20.0 - 10.0, f() * 20.0 - 10.0, f() * 4.0))
+            * Transform::rotation(axis, f() * 360.0).unwrap()
+            * Transform::scaling(Vec3::new(0.3 + f(), 0.3 + f(), 0.3 + f()))
+    }
+
+    /// A sphere of its own, and `placements` of a group (octahedron and sphere); with
+    /// `instanced` false the same shapes are copied into the world instead.
+    fn scene(placements: &[Transform], instanced: bool, kind: AccelKind) -> Scene {
+        let mut b = SceneBuilder::new();
+        let m0 = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
+        let m1 = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+        let m2 = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.25))));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                0.0, 0.0, -30.0,
+            )))),
+            m0,
+            None,
+        );
+        let ball = Transform::translation(Vec3::new(0.0, 0.0, 2.0))
+            * Transform::scaling(Vec3::new(0.5, 0.5, 0.5));
+        if instanced {
+            let g = b
+                .add_group(vec![(Shape::Sphere(Sphere::new(ball)), m2)], vec![octahedron(m1)])
+                .unwrap();
+            for t in placements {
+                b.add_instance(g, *t);
+            }
+        } else {
+            for t in placements {
+                b.add_shape(Shape::Sphere(Sphere::new(*t * ball)), m2, None);
+            }
+            for t in placements {
+                b.add_mesh(octahedron(m1).transformed(t));
+            }
+        }
+        b.build(kind)
+    }
+
+    fn ray(rng: &mut Pcg32) -> Ray {
+        let mut f = || rng.next_f32();
+        let o = Point3::new(f() * 30.0 - 15.0, f() * 30.0 - 15.0, 10.0 + f() * 5.0);
+        let target = Point3::new(f() * 24.0 - 12.0, f() * 24.0 - 12.0, f() * 5.0 - 1.0);
+        Ray::new(o, target - o)
+    }
+
+    #[test]
+    fn identity_instances_hit_exactly_what_the_copies_hit() {
+        let placements = [Transform::IDENTITY; 3];
+        for kind in KINDS {
+            let a = scene(&placements, true, kind);
+            let b = scene(&placements[..1], false, kind);
+            let mut rng = Pcg32::new(1, 2);
+            let mut st = RayStats::default();
+            let mut hits = 0;
+            for _ in 0..2000 {
+                let mut f = || rng.next_f32();
+                let o = Point3::new(f() * 6.0 - 3.0, f() * 6.0 - 3.0, 5.0 + f());
+                let target = Point3::new(f() * 3.0 - 1.5, f() * 3.0 - 1.5, f() * 2.0 - 1.0);
+                let r = Ray::new(o, target - o);
+                let (x, y) = (a.interact(&r, &mut st), b.interact(&r, &mut st));
+                assert_eq!(x.is_some(), y.is_some(), "{kind:?} {r:?}");
+                let (Some(x), Some(y)) = (x, y) else { continue };
+                hits += 1;
+                assert_eq!(
+                    (x.p, x.n, x.ns, x.uv, x.dpdu, x.wo, x.t, x.props),
+                    (y.p, y.n, y.ns, y.uv, y.dpdu, y.wo, y.t, y.props),
+                    "{kind:?}"
+                );
+                assert_eq!(
+                    x.shading_frame(),
+                    y.shading_frame(),
+                    "{kind:?}: the same shading frame"
+                );
+                assert_eq!(a.occluded(&r, &mut st), b.occluded(&r, &mut st));
+            }
+            assert!(hits > 200, "{kind:?}: {hits}");
+        }
+    }
+
+    #[test]
+    fn transformed_instances_agree_with_transformed_copies() {
+        let mut rng = Pcg32::new(7, 8);
+        let placements: Vec<Transform> = (0..40).map(|_| placement(&mut rng)).collect();
+        let a = scene(&placements, true, AccelKind::Bvh);
+        let b = scene(&placements, false, AccelKind::Bvh);
+        let mut st = RayStats::default();
+        let (mut hits, mut differ) = (0, 0);
+        for _ in 0..20_000 {
+            let r = ray(&mut rng);
+            let (x, y) = (a.interact(&r, &mut st), b.interact(&r, &mut st));
+            let (Some(x), Some(y)) = (x, y) else {
+                // Only grazing rays may see an edge differently.
+                differ += (x.is_some() != y.is_some()) as u32;
+                continue;
+            };
+            hits += 1;
+            if (x.t - y.t).abs() > 1e-4 * y.t {
+                differ += 1;
+                continue;
+            }
+            assert!((x.p - y.p).norm() < 1e-3, "{:?} {:?}", x.p, y.p);
+            assert!(x.n.to_vec().approx_eq(y.n.to_vec(), 1e-3), "{x:?} {y:?}");
+            assert_eq!(x.props, y.props);
+            assert!((x.uv.x - y.uv.x).abs() < 1e-3 && (x.uv.y - y.uv.y).abs() < 1e-3);
+            assert_eq!(
+                a.shape_index(&x) >= 1,
+                b.shape_index(&y) >= 1,
+                "the world's own sphere is shape 0 in both"
+            );
+        }
+        assert!(hits > 2000, "{hits}");
+        assert!(differ < 20, "{differ} rays disagree");
+    }
+
+    #[test]
+    fn every_structure_finds_the_brute_force_hit_through_the_top_level() {
+        let mut rng = Pcg32::new(11, 12);
+        let placements: Vec<Transform> = (0..200).map(|_| placement(&mut rng)).collect();
+        for kind in KINDS {
+            let s = scene(&placements, true, kind);
+            let g = &s.geometry;
+            let lists: Vec<Accel> = g
+                .groups()
+                .iter()
+                .map(|gr| Accel::build(AccelKind::None, gr))
+                .collect();
+            let mut st = RayStats::default();
+            let mut rng = Pcg32::new(13, 14);
+            for _ in 0..3000 {
+                let r = ray(&mut rng);
+                // Brute force: every instance, each through the list.
+                let mut best = s.accel.intersect(g, &r, &mut st);
+                for (i, inst) in g.instances().iter().enumerate() {
+                    let local = local_ray(&r, inst);
+                    let gr = &g.groups()[inst.group as usize];
+                    let mut l = local;
+                    if let Some(b) = &best {
+                        l.tmax = b.t.next_up();
+                    }
+                    if let Some(h) = lists[inst.group as usize].intersect(gr, &l, &mut st) {
+                        closest(
+                            &mut best,
+                            Hit {
+                                prim: g.prim_count() + i as u32,
+                                inner: h.prim,
+                                ..h
+                            },
+                        );
+                    }
+                }
+                assert_eq!(s.intersect(&r, &mut st), best, "{kind:?} {r:?}");
+                assert_eq!(s.occluded(&r, &mut st), best.is_some(), "{kind:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn batches_get_the_single_ray_hits() {
+        let mut rng = Pcg32::new(21, 22);
+        let placements: Vec<Transform> = (0..100).map(|_| placement(&mut rng)).collect();
+        let s = scene(&placements, true, AccelKind::Bvh);
+        let mut st = RayStats::default();
+        for _ in 0..100 {
+            let rays: Vec<Ray> = (0..BATCH).map(|_| ray(&mut rng)).collect();
+            let mut batch = RayBatch::default();
+            for (i, r) in rays.iter().enumerate() {
+                batch.set(i, r);
+            }
+            let mut hits = [None; BATCH];
+            s.intersect_batch(&batch, &mut hits, &mut st);
+            let occ = s.occluded_batch(&batch, &mut st);
+            for (i, r) in rays.iter().enumerate() {
+                assert_eq!(hits[i], s.intersect(r, &mut st));
+                assert_eq!(occ & (1 << i) != 0, s.occluded(r, &mut st));
+            }
+        }
+    }
+
+    /// By hand: the triangle A = (1,0,0), B = (0,0,1), C = (0,1,1) (plane x + z = 1, uv (0,0),
+    /// (1,0), (0,1), vertex normals +z) placed by a scaling (2,1,1) lies in the plane
+    /// x/2 + z = 1. A ray down from (0.5, 0.25, 5) meets it at t = 4.25, at (0.5, 0.25, 0.75):
+    /// in group space (0.25, 0.25, 0.75), β = 0.5, γ = 0.25, so uv = (0.5, 0.25). The group
+    /// normal (1,0,1)/√2 goes back by the inverse transpose diag(1/2, 1, 1): (1,0,2)/√5; the
+    /// shading normal +z stays +z; ∂p/∂u = B − A = (−1,0,1) becomes (−2,0,1).
+    #[test]
+    fn a_hit_in_a_scaled_instance_by_hand() {
+        let mut b = SceneBuilder::new();
+        let m0 = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
+        let m1 = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                50.0, 0.0, 0.0,
+            )))),
+            m0,
+            None,
+        );
+        let mut tri = Mesh {
+            positions: vec![
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(0.0, 0.0, 1.0),
+                Point3::new(0.0, 1.0, 1.0),
+            ],
+            normals: vec![Normal3::new(0.0, 0.0, 1.0); 3],
+            uvs: vec![
+                Point2::new(0.0, 0.0),
+                Point2::new(1.0, 0.0),
+                Point2::new(0.0, 1.0),
+            ],
+            indices: vec![[0, 1, 2]],
+            ..Default::default()
+        };
+        tri.props.material = m1;
+        let g = b
+            .add_group(
+                vec![(
+                    Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                        0.0, 0.0, -5.0,
+                    )))),
+                    m0,
+                )],
+                vec![tri],
+            )
+            .unwrap();
+        b.add_instance(g, Transform::translation(Vec3::new(100.0, 0.0, 0.0)));
+        b.add_instance(g, Transform::scaling(Vec3::new(2.0, 1.0, 1.0)));
+        let s = b.build(AccelKind::Bvh);
+        let r = Ray::new(Point3::new(0.5, 0.25, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        let mut st = RayStats::default();
+        let si = s.interact(&r, &mut st).unwrap();
+        assert_eq!(si.t, 4.25);
+        assert!((si.p - Point3::new(0.5, 0.25, 0.75)).norm() < 1e-6);
+        assert!((si.uv.x - 0.5).abs() < 1e-6 && (si.uv.y - 0.25).abs() < 1e-6);
+        let n = Vec3::new(1.0, 0.0, 2.0) / 5f32.sqrt();
+        assert!(si.n.to_vec().approx_eq(n, 1e-6), "{:?}", si.n);
+        assert_eq!(si.ns, Normal3::new(0.0, 0.0, 1.0));
+        assert!(si.dpdu.approx_eq(Vec3::new(-2.0, 0.0, 1.0), 1e-6));
+        assert_eq!(si.wo, Vec3::new(0.0, 0.0, 1.0));
+        assert_eq!(si.props.material, m1);
+        // The second instance (primitive id after the world's sphere and the first instance),
+        // its second shape (the triangle): shapes 0 (world sphere), 1–2 (first instance), 3–4.
+        assert_eq!((si.prim, si.inner), (2, 1));
+        assert_eq!(s.shape_index(&si), 4);
+        // Below the triangle: the group's sphere, moved and stretched along x.
+        let r = Ray::new(Point3::new(-10.0, 0.0, -5.0), Vec3::new(1.0, 0.0, 0.0));
+        let si = s.interact(&r, &mut st).unwrap();
+        assert_eq!(si.t, 8.0);
+        assert!(si.n.to_vec().approx_eq(Vec3::new(-1.0, 0.0, 0.0), 1e-6));
+        assert_eq!(s.shape_index(&si), 3);
+        assert_eq!(si.props.material, m0);
+        assert!(s.occluded(&r, &mut st));
+        assert!(!s.occluded(
+            &Ray::new(Point3::new(0.0, 5.0, 0.0), Vec3::new(0.0, 1.0, 0.0)),
+            &mut st
+        ));
+        // The world bounds cover both instances.
+        let wb = s.geometry.bounds();
+        assert!(wb.max.x >= 101.0 && wb.min.z <= -6.0);
+    }
+
+    #[test]
+    fn groups_refuse_emitters_and_unbounded_shapes() {
+        let mut b = SceneBuilder::new();
+        let mut m = octahedron(0);
+        m.props.emission = Some(0);
+        assert_eq!(b.add_group(Vec::new(), vec![m]), Err(GroupError::Emitter(0)));
+        let plane = Shape::Plane(crate::shape::Plane::new(Transform::IDENTITY));
+        assert_eq!(
+            b.add_group(vec![(plane, 0)], Vec::new()),
+            Err(GroupError::Unbounded(0))
+        );
+    }
+
+    #[test]
+    fn memory_grows_with_the_groups_not_the_instances() {
+        let mut rng = Pcg32::new(5, 5);
+        let few: Vec<Transform> = (0..10).map(|_| placement(&mut rng)).collect();
+        let many: Vec<Transform> = (0..10_000).map(|_| placement(&mut rng)).collect();
+        let (a, b) = (
+            scene(&few, true, AccelKind::Bvh),
+            scene(&many, true, AccelKind::Bvh),
+        );
+        assert_eq!(a.geometry.groups().len(), 1);
+        assert_eq!(b.geometry.groups().len(), 1);
+        // Top level: one node per instance or less, 36 bytes each, and 4 bytes of order.
+        let per_instance = (b.instances.memory() - a.instances.memory()) as f64 / 9990.0;
+        assert!(per_instance < 2.0 * 40.0 + 4.0, "{per_instance}");
+    }
+}
