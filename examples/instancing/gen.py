@@ -89,7 +89,9 @@ def scene(path, n):
     for i in range(n):
         x, y = (i % side) * spacing - half, (i // side) * spacing - half
         sx, sy, sz = (rng.uniform(0.7, 1.3) for _ in range(3))
-        ax = [rng.uniform(-1, 1) for _ in range(3)]
+        ax = [rng.gauss(0, 1) for _ in range(3)]
+        norm = math.sqrt(sum(a * a for a in ax)) or 1.0
+        ax = [a / norm for a in ax]  # Mitsuba does not normalise rotation axes
         angle = rng.uniform(0, 360)
         out.append(
             f'  <shape type="instance"><ref id="torus"/><transform name="to_world">'

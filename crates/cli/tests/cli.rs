@@ -12,7 +12,7 @@ use support::{candela, repo, scratch, stderr};
 fn every_example_renders() {
     let dir = scratch("examples");
     let mut n = 0;
-    let entries = ["examples", "examples/mitsuba"]
+    let entries = ["examples", "examples/mitsuba", "examples/instancing"]
         .iter()
         .flat_map(|d| std::fs::read_dir(repo().join(d)).unwrap());
     for entry in entries {
