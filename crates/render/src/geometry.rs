@@ -155,8 +155,7 @@ impl Geometry {
             Some(PrimRef::Triangle { mesh, .. }) => self.objects.len() as u32 + mesh,
             None => {
                 let inst = &self.instances[(prim - self.prims.len() as u32) as usize];
-                inst.first_shape
-                    + self.groups[inst.group as usize].shape_index(inner, 0)
+                inst.first_shape + self.groups[inst.group as usize].shape_index(inner, 0)
             }
         }
     }

@@ -340,7 +340,10 @@ mod tests {
             * Transform::scaling(Vec3::new(0.5, 0.5, 0.5));
         if instanced {
             let g = b
-                .add_group(vec![(Shape::Sphere(Sphere::new(ball)), m2)], vec![octahedron(m1)])
+                .add_group(
+                    vec![(Shape::Sphere(Sphere::new(ball)), m2)],
+                    vec![octahedron(m1)],
+                )
                 .unwrap();
             for t in placements {
                 b.add_instance(g, *t);
@@ -582,7 +585,10 @@ mod tests {
         let mut b = SceneBuilder::new();
         let mut m = octahedron(0);
         m.props.emission = Some(0);
-        assert_eq!(b.add_group(Vec::new(), vec![m]), Err(GroupError::Emitter(0)));
+        assert_eq!(
+            b.add_group(Vec::new(), vec![m]),
+            Err(GroupError::Emitter(0))
+        );
         let plane = Shape::Plane(crate::shape::Plane::new(Transform::IDENTITY));
         assert_eq!(
             b.add_group(vec![(plane, 0)], Vec::new()),

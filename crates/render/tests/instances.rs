@@ -31,7 +31,12 @@ fn uv_sphere(n: usize) -> Mesh {
     let w = 2 * n as u32 + 1;
     for i in 0..n as u32 {
         for j in 0..2 * n as u32 {
-            let (a, b, c, d) = (i * w + j, (i + 1) * w + j, (i + 1) * w + j + 1, i * w + j + 1);
+            let (a, b, c, d) = (
+                i * w + j,
+                (i + 1) * w + j,
+                (i + 1) * w + j + 1,
+                i * w + j + 1,
+            );
             m.indices.push([a, b, c]);
             m.indices.push([a, c, d]);
         }
@@ -187,4 +192,3 @@ fn an_instanced_scene_gives_the_same_bytes_at_any_thread_count() {
     assert_eq!(a.image, b.image);
     assert_eq!(a.stats, b.stats);
 }
-

@@ -75,7 +75,11 @@ fn same_hits(a: &Scene, b: &Scene, rays: &[Ray]) -> usize {
             _ => differ += 1,
         }
     }
-    assert!(differ * 1000 < rays.len(), "{differ} of {} rays differ", rays.len());
+    assert!(
+        differ * 1000 < rays.len(),
+        "{differ} of {} rays differ",
+        rays.len()
+    );
     hits
 }
 
@@ -141,7 +145,10 @@ fn mitsuba_instances_hit_what_the_placed_shapes_hit() {
             shapes.insert(a.scene.shape_index(&si));
         }
     }
-    assert_eq!(shapes.into_iter().collect::<Vec<_>>(), (0..10).collect::<Vec<u32>>());
+    assert_eq!(
+        shapes.into_iter().collect::<Vec<_>>(),
+        (0..10).collect::<Vec<u32>>()
+    );
 }
 
 #[test]
@@ -227,7 +234,8 @@ fn course_instances_of_a_mesh_share_it() {
         "translation([3, 1, 0]) * rotation([1, 1, 0], 40) * scaling([0.5, 1.5, 0.8])",
         "translation([-3, -2, 0.5]) * rotation_z(-75) * scaling([-1, 1, 1.2])",
     ];
-    let head = "material red(diffuse(<0.8, 0.2, 0.2>))\nmaterial lamp(diffuse(<0, 0, 0>), <1, 1, 1>)\n";
+    let head =
+        "material red(diffuse(<0.8, 0.2, 0.2>))\nmaterial lamp(diffuse(<0, 0, 0>), <1, 1, 1>)\n";
     let own = "rotation_x(20)";
     let mut instanced = format!("{head}shape t(mesh(red, {own}, \"torus.ply\"))\n");
     let mut flat = head.to_string();
