@@ -147,7 +147,7 @@ impl Geometry {
     }
 
     /// The index of the shape primitive `prim` belongs to (`inner`: the primitive in the
-    /// group of an instance, see [`Hit::inner`]): objects first (in the order given), then
+    /// group of an instance, see [`Hit::leaf`]): objects first (in the order given), then
     /// meshes, then the shapes of each instance.
     pub fn shape_index(&self, prim: u32, inner: u32) -> u32 {
         match self.prims.get(prim as usize) {
@@ -195,7 +195,6 @@ impl Geometry {
             uv: h.uv,
             sub: h.sub,
             leaf: h.leaf,
-            inner: 0,
         })
     }
 
@@ -283,13 +282,13 @@ impl Geometry {
             tmax: ray.tmax,
         };
         let inner = Hit {
-            prim: hit.inner,
-            inner: 0,
+            prim: hit.leaf,
+            leaf: 0,
             ..*hit
         };
         let mut si = group.interaction(&local, &inner);
         si.prim = hit.prim;
-        si.inner = hit.inner;
+        si.inner = hit.leaf;
         if t.is_identity() {
             return si;
         }

@@ -5,7 +5,8 @@
 //! A ray is brought into an instance's group space by the inverse placement (origin and
 //! direction, not renormalised, so the ray parameter `t` is the same in both spaces) and traced
 //! through the group's structure; the closest hit keeps the instance's primitive id in
-//! [`Hit::prim`] and the group's primitive in [`Hit::inner`], and
+//! [`Hit::prim`] and the group's primitive in [`Hit::leaf`] (groups hold no CSG, whose hits
+//! use it), and
 //! [`Geometry::interaction`] moves the surface back to the world. Memory grows with the
 //! distinct groups (their shapes and structures) plus a few hundred bytes per instance.
 //!
@@ -128,7 +129,7 @@ impl Instances {
             if let Some(h) = self.groups[g].intersect(&geometry.groups()[g], &local, stats) {
                 let h = Hit {
                     prim: self.base + i,
-                    inner: h.prim,
+                    leaf: h.prim,
                     ..h
                 };
                 if closest(best, h) {
@@ -465,7 +466,7 @@ mod tests {
                             &mut best,
                             Hit {
                                 prim: g.prim_count() + i as u32,
-                                inner: h.prim,
+                                leaf: h.prim,
                                 ..h
                             },
                         );

@@ -36,11 +36,9 @@ pub struct Hit {
     pub uv: [f32; 2],
     /// Primitive-specific index.
     pub sub: u32,
-    /// For CSG: the leaf hit.
+    /// For CSG: the leaf hit. In an instance (`prim` is then the instance's id): the
+    /// primitive hit in the shared geometry of its group (groups hold no CSG).
     pub leaf: u32,
-    /// In an instance (`prim` is then the instance's id): the primitive hit in the shared
-    /// geometry of its group; 0 otherwise.
-    pub inner: u32,
 }
 
 impl Hit {
@@ -70,7 +68,8 @@ pub struct SurfaceInteraction {
     pub t: f32,
     /// The primitive hit.
     pub prim: u32,
-    /// In an instance: the primitive hit in its group's geometry (see [`Hit::inner`]).
+    /// In an instance: the primitive hit in its group's geometry (see [`Hit::leaf`]); 0
+    /// otherwise.
     pub inner: u32,
     /// Material, emission and light of the surface.
     pub props: SurfaceProps,

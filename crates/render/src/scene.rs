@@ -288,6 +288,8 @@ pub enum GroupError {
     Unbounded(usize),
     /// An emitting shape.
     Emitter(usize),
+    /// A CSG shape (its hits use the field that instances use, `Hit::leaf`).
+    Csg(usize),
 }
 
 impl std::fmt::Display for GroupError {
@@ -296,6 +298,7 @@ impl std::fmt::Display for GroupError {
             GroupError::Unbounded(_) => {
                 write!(f, "a shape group cannot hold unbounded shapes (planes)")
             }
+            GroupError::Csg(_) => write!(f, "a shape group cannot hold CSG shapes"),
             GroupError::Emitter(_) => write!(
                 f,
                 "a shape group cannot hold emitters (instanced emitters are not supported, as in Mitsuba 3)"
@@ -434,7 +437,8 @@ impl SceneBuilder {
     /// Adds a group of shapes to be placed by [`SceneBuilder::add_instance`] (and not
     /// otherwise), in its own space, and returns its index. Each shape is given as
     /// `(shape, material)`; meshes carry their material. A group holds bounded shapes that
-    /// emit nothing (as in Mitsuba, whose shape groups refuse emitters); the error says which
+    /// emit nothing (as in Mitsuba, whose shape groups refuse emitters) and are not CSG; the
+    /// error says which
     /// rule a shape breaks (its index among `shapes`, then `meshes`). Empty meshes are dropped.
     pub fn add_group(
         &mut self,
@@ -444,6 +448,9 @@ impl SceneBuilder {
         for (i, (s, _)) in shapes.iter().enumerate() {
             if s.bounds().is_none() {
                 return Err(GroupError::Unbounded(i));
+            }
+            if matches!(s, Shape::Csg(_)) {
+                return Err(GroupError::Csg(i));
             }
         }
         for (i, m) in meshes.iter().enumerate() {

@@ -297,7 +297,6 @@ impl Embree {
                     uv: [rh.hit.u, rh.hit.v],
                     sub: 0,
                     leaf: 0,
-                    inner: 0,
                 },
             );
         }

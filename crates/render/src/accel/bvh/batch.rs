@@ -459,7 +459,6 @@ impl WideKernel for Closest<'_> {
                     uv: [u[i], v[i]],
                     sub: face[i] as u32,
                     leaf: 0,
-                    inner: 0,
                 });
             }
         }

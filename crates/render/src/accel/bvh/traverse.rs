@@ -386,7 +386,6 @@ impl Query for ClosestQuery<'_> {
                             uv: [h.v[i] * h.inv_det[i], h.w[i] * h.inv_det[i]],
                             sub: 0,
                             leaf: 0,
-                            inner: 0,
                         });
                         self.ray.tmax = t_hit.next_up();
                     }
@@ -420,7 +419,6 @@ impl Query for ClosestQuery<'_> {
                             uv: [h.uv[0][i], h.uv[1][i]],
                             sub: h.face[i],
                             leaf: 0,
-                            inner: 0,
                         });
                         self.ray.tmax = t_hit.next_up();
                     }
