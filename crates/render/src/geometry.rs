@@ -261,7 +261,6 @@ impl Geometry {
             wo: -ray.d.normalize(),
             t: hit.t,
             prim: hit.prim,
-            inner: 0,
             props,
             frame,
         }
@@ -270,6 +269,7 @@ impl Geometry {
     /// [`Geometry::interaction`] for a hit in an instance: the group's interaction along the
     /// ray brought into group space, moved back to the world (points and tangents by the
     /// placement, normals by its inverse transpose).
+    #[cold]
     #[inline(never)]
     fn instance_interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
         let inst = &self.instances[(hit.prim - self.prims.len() as u32) as usize];
@@ -288,7 +288,6 @@ impl Geometry {
         };
         let mut si = group.interaction(&local, &inner);
         si.prim = hit.prim;
-        si.inner = hit.leaf;
         if t.is_identity() {
             return si;
         }

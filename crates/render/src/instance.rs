@@ -426,9 +426,13 @@ mod tests {
             assert!(x.n.to_vec().approx_eq(y.n.to_vec(), 1e-3), "{x:?} {y:?}");
             assert_eq!(x.props, y.props);
             assert!((x.uv.x - y.uv.x).abs() < 1e-3 && (x.uv.y - y.uv.y).abs() < 1e-3);
+            let (hx, hy) = (
+                a.intersect(&r, &mut st).unwrap(),
+                b.intersect(&r, &mut st).unwrap(),
+            );
             assert_eq!(
-                a.shape_index(&x) >= 1,
-                b.shape_index(&y) >= 1,
+                a.shape_index(&hx) >= 1,
+                b.shape_index(&hy) >= 1,
                 "the world's own sphere is shape 0 in both"
             );
         }
@@ -562,14 +566,15 @@ mod tests {
         assert_eq!(si.props.material, m1);
         // The second instance (primitive id after the world's sphere and the first instance),
         // its second shape (the triangle): shapes 0 (world sphere), 1–2 (first instance), 3–4.
-        assert_eq!((si.prim, si.inner), (2, 1));
-        assert_eq!(s.shape_index(&si), 4);
+        let h = s.intersect(&r, &mut st).unwrap();
+        assert_eq!((si.prim, h.prim, h.leaf), (2, 2, 1));
+        assert_eq!(s.shape_index(&h), 4);
         // Below the triangle: the group's sphere, moved and stretched along x.
         let r = Ray::new(Point3::new(-10.0, 0.0, -5.0), Vec3::new(1.0, 0.0, 0.0));
         let si = s.interact(&r, &mut st).unwrap();
         assert_eq!(si.t, 8.0);
         assert!(si.n.to_vec().approx_eq(Vec3::new(-1.0, 0.0, 0.0), 1e-6));
-        assert_eq!(s.shape_index(&si), 3);
+        assert_eq!(s.shape_index(&s.intersect(&r, &mut st).unwrap()), 3);
         assert_eq!(si.props.material, m0);
         assert!(s.occluded(&r, &mut st));
         assert!(!s.occluded(

@@ -68,9 +68,6 @@ pub struct SurfaceInteraction {
     pub t: f32,
     /// The primitive hit.
     pub prim: u32,
-    /// In an instance: the primitive hit in its group's geometry (see [`Hit::leaf`]); 0
-    /// otherwise.
-    pub inner: u32,
     /// Material, emission and light of the surface.
     pub props: SurfaceProps,
     /// The shading frame when the shape has it ready (flat shapes keep one per face); `None`:

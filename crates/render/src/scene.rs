@@ -259,10 +259,11 @@ impl Scene {
         Some(self.geometry.interaction(ray, &h))
     }
 
-    /// The shape index (the `shape` output variable) of an interaction.
+    /// The shape index (the `shape` output variable) of a hit (in an instance, the hit knows
+    /// the group's shape; the interaction does not).
     #[inline]
-    pub fn shape_index(&self, si: &SurfaceInteraction) -> u32 {
-        self.geometry.shape_index(si.prim, si.inner)
+    pub fn shape_index(&self, hit: &Hit) -> u32 {
+        self.geometry.shape_index(hit.prim, hit.leaf)
     }
 
     /// The material of an interaction.

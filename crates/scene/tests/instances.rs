@@ -141,8 +141,8 @@ fn mitsuba_instances_hit_what_the_placed_shapes_hit() {
     let mut st = RayStats::default();
     let mut shapes = std::collections::BTreeSet::new();
     for r in rays(4, 5000) {
-        if let Some(si) = a.scene.interact(&r, &mut st) {
-            shapes.insert(a.scene.shape_index(&si));
+        if let Some(h) = a.scene.intersect(&r, &mut st) {
+            shapes.insert(a.scene.shape_index(&h));
         }
     }
     assert_eq!(
