@@ -4,7 +4,8 @@ vertex normals) and Mitsuba 3 scenes placing it N times through a shapegroup.
 
     python3 examples/instancing/gen.py OUT_DIR [N ...]      # default N: 1 and 10000
 
-Each `OUT_DIR/instances-N.xml` places the one `torus.ply` N times on a square grid (random
+Each `OUT_DIR/instances-N.xml` (and `instances-N.scene`, the same in the candela language)
+places the one `torus.ply` N times on a square grid (random
 rotation, non-uniform scale and tint from a fixed seed: deterministic files), on a ground
 rectangle under a sun and a sky. Nothing here is committed but this script: the mesh is
 2.5 MB, the 10 000-instance scene 2.2 MB.
@@ -104,6 +105,35 @@ def scene(path, n):
         f.write("\n".join(out) + "\n")
 
 
+def course(path, n):
+    """The same placements in the candela language (`instance(NAME, T)` of a named mesh)."""
+    rng = random.Random(1)
+    side = math.ceil(math.sqrt(n))
+    spacing = 3.0
+    half = (side - 1) * spacing / 2
+    out = [
+        "material ground(diffuse(<0.5, 0.5, 0.5>))",
+        "material clay(diffuse(<0.8, 0.3, 0.2>))",
+        f"parallelogram(ground, [{-half - 10}, {-half - 10}, -1.2], [{2 * half + 20}, 0, 0], [0, {2 * half + 20}, 0])",
+        "environment(<0.25, 0.3, 0.4>)",
+        "distant_light([1, 0.6, -1], <3, 2.8, 2.5>)",
+        f"camera(perspective, look_at([{-half - 8}, {-half - 8}, {max(6.0, half * 0.45)}], [0, 0, 0], [0, 0, 1]), 1.7777778, 1.8)",
+        'shape torus(mesh(clay, identity, "torus.ply"))',
+    ]
+    for i in range(n):
+        x, y = (i % side) * spacing - half, (i // side) * spacing - half
+        sx, sy, sz = (rng.uniform(0.7, 1.3) for _ in range(3))
+        ax = [rng.gauss(0, 1) for _ in range(3)]
+        angle = rng.uniform(0, 360)
+        out.append(
+            f"instance(torus, translation([{x:.3f}, {y:.3f}, 0]) * "
+            f"rotation([{ax[0]:.4f}, {ax[1]:.4f}, {ax[2]:.4f}], {angle:.2f}) * "
+            f"scaling([{sx:.4f}, {sy:.4f}, {sz:.4f}]))"
+        )
+    with open(path, "w") as f:
+        f.write("\n".join(out) + "\n")
+
+
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
@@ -113,7 +143,11 @@ def main():
     tris = torus(os.path.join(out, "torus.ply"))
     for n in counts:
         scene(os.path.join(out, f"instances-{n}.xml"), n)
-    print(f"{out}: torus.ply ({tris} triangles), " + ", ".join(f"instances-{n}.xml" for n in counts))
+        course(os.path.join(out, f"instances-{n}.scene"), n)
+    print(
+        f"{out}: torus.ply ({tris} triangles), "
+        + ", ".join(f"instances-{n}.xml/.scene" for n in counts)
+    )
 
 
 if __name__ == "__main__":
