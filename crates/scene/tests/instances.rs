@@ -5,7 +5,7 @@
 
 mod support;
 
-use candela_render::math::{Point3, Ray, Vec3};
+use candela_render::math::{Point3, Ray};
 use candela_render::sampling::Pcg32;
 use candela_render::stats::RayStats;
 use candela_render::Scene;
