@@ -56,10 +56,16 @@ impl Instances {
         if geometry.instances().is_empty() {
             return Self::default();
         }
+        // Groups that no instance places get no structure (the list, which holds nothing).
+        let mut placed = vec![false; geometry.groups().len()];
+        for inst in geometry.instances() {
+            placed[inst.group as usize] = true;
+        }
         let groups = geometry
             .groups()
             .iter()
-            .map(|g| Accel::build(kind, g))
+            .zip(placed)
+            .map(|(g, placed)| Accel::build(if placed { kind } else { AccelKind::None }, g))
             .collect();
         let mut items: Vec<(Bounds3, Point3, u32)> = (0..geometry.instances().len() as u32)
             .filter_map(|i| {
