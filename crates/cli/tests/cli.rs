@@ -166,6 +166,41 @@ fn images_do_not_depend_on_the_thread_count() {
     }
 }
 
+/// An instanced scene (Mitsuba shapegroup and instances, the course's instances of a mesh)
+/// gives the same bytes with one thread and with two, shape output variable included.
+#[test]
+fn instanced_images_do_not_depend_on_the_thread_count() {
+    let dir = scratch("threads-instances");
+    for scene in ["small.xml", "small.scene"] {
+        let path = repo().join("examples/instancing").join(scene);
+        let run = |threads: &str| {
+            let out = dir.join(format!("{scene}-{threads}.exr"));
+            let o = candela(&[
+                "render",
+                path.to_str().unwrap(),
+                "--width",
+                "40",
+                "--height",
+                "30",
+                "--spp",
+                "4",
+                "--integrator",
+                "path",
+                "--aov",
+                "shape,normal",
+                "--threads",
+                threads,
+                "-q",
+                "-o",
+                out.to_str().unwrap(),
+            ]);
+            assert!(o.status.success(), "{}", stderr(&o));
+            std::fs::read(out).unwrap()
+        };
+        assert_eq!(run("1"), run("2"), "{scene}");
+    }
+}
+
 /// `convert` applies the course's tone mapping: a uniform grey PFM of value 1 with a = 0.18,
 /// γ = 1 maps every channel to 0.18/1.18 → byte int(255·0.152542) = 38.
 #[test]
