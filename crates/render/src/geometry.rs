@@ -61,6 +61,8 @@ pub struct Geometry {
     bounded: u32,
     /// Shared groups (each without instances of its own).
     groups: Vec<Arc<Geometry>>,
+    /// The bounds of each group, in its space.
+    group_bounds: Vec<Bounds3>,
     /// Placements of the groups.
     instances: Vec<Instance>,
 }
@@ -91,6 +93,7 @@ impl Geometry {
             next = next.saturating_add((g.objects.len() + g.meshes.len()) as u32);
         }
         let mut g = Self::own(objects, meshes);
+        g.group_bounds = groups.iter().map(|g| g.bounds()).collect();
         g.groups = groups;
         g.instances = instances;
         g
@@ -115,6 +118,7 @@ impl Geometry {
             prims,
             bounded: n,
             groups: Vec::new(),
+            group_bounds: Vec::new(),
             instances: Vec::new(),
         }
     }
@@ -132,7 +136,7 @@ impl Geometry {
     /// World bounds of instance `i` (its group's bounds, transformed).
     pub fn instance_bounds(&self, i: u32) -> Bounds3 {
         let inst = &self.instances[i as usize];
-        let b = self.groups[inst.group as usize].bounds();
+        let b = self.group_bounds[inst.group as usize];
         if b.is_empty() {
             b
         } else {
