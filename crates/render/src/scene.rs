@@ -439,8 +439,8 @@ impl SceneBuilder {
     /// otherwise), in its own space, and returns its index. Each shape is given as
     /// `(shape, material)`; meshes carry their material. A group holds bounded shapes that
     /// emit nothing (as in Mitsuba, whose shape groups refuse emitters) and are not CSG; the
-    /// error says which
-    /// rule a shape breaks (its index among `shapes`, then `meshes`). Empty meshes are dropped.
+    /// error says which rule a shape breaks (its index among `shapes`, then `meshes`). Empty
+    /// meshes are dropped.
     pub fn add_group(
         &mut self,
         shapes: Vec<(Shape, MaterialId)>,
