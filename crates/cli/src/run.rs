@@ -555,6 +555,9 @@ fn render_frame(
         if let Some((triangles, bytes)) = loaded.mesh_stats {
             eprintln!("meshes: {triangles} triangles, {bytes:.1} bytes per triangle");
         }
+        if !loaded.scene.instances.is_empty() {
+            eprintln!("instances: {}", loaded.scene.instances.describe());
+        }
         let s = &stats;
         let rays = s.total_rays();
         eprintln!(

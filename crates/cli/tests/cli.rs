@@ -12,7 +12,7 @@ use support::{candela, repo, scratch, stderr};
 fn every_example_renders() {
     let dir = scratch("examples");
     let mut n = 0;
-    let entries = ["examples", "examples/mitsuba"]
+    let entries = ["examples", "examples/mitsuba", "examples/instancing"]
         .iter()
         .flat_map(|d| std::fs::read_dir(repo().join(d)).unwrap());
     for entry in entries {
@@ -163,6 +163,41 @@ fn images_do_not_depend_on_the_thread_count() {
         let a = run("1", sampler, "one.pfm");
         let b = run("3", sampler, "three.pfm");
         assert_eq!(a, b, "{sampler}");
+    }
+}
+
+/// An instanced scene (Mitsuba shapegroup and instances, the course's instances of a mesh)
+/// gives the same bytes with one thread and with two, shape output variable included.
+#[test]
+fn instanced_images_do_not_depend_on_the_thread_count() {
+    let dir = scratch("threads-instances");
+    for scene in ["small.xml", "small.scene"] {
+        let path = repo().join("examples/instancing").join(scene);
+        let run = |threads: &str| {
+            let out = dir.join(format!("{scene}-{threads}.exr"));
+            let o = candela(&[
+                "render",
+                path.to_str().unwrap(),
+                "--width",
+                "40",
+                "--height",
+                "30",
+                "--spp",
+                "4",
+                "--integrator",
+                "path",
+                "--aov",
+                "shape,normal",
+                "--threads",
+                threads,
+                "-q",
+                "-o",
+                out.to_str().unwrap(),
+            ]);
+            assert!(o.status.success(), "{}", stderr(&o));
+            std::fs::read(out).unwrap()
+        };
+        assert_eq!(run("1"), run("2"), "{scene}");
     }
 }
 

@@ -102,6 +102,7 @@ fn more_samples_allocate_nothing_more() {
     let mut scenes: Vec<_> = std::fs::read_dir(&root)
         .unwrap()
         .chain(std::fs::read_dir(root.join("mitsuba")).unwrap())
+        .chain(std::fs::read_dir(root.join("instancing")).unwrap())
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "scene" || e == "xml"))
         .collect();

@@ -190,9 +190,10 @@ impl AovSet {
 /// [`AovSet::channels`] values).
 pub fn aov_sample(scene: &Scene, ray: &Ray, set: AovSet, out: &mut [f32], stats: &mut RayStats) {
     out.fill(0.0);
-    let Some(first) = scene.interact(ray, stats) else {
+    let Some(hit) = scene.intersect(ray, stats) else {
         return;
     };
+    let first = scene.geometry.interaction(ray, &hit);
     // The first hit that is not a perfect mirror or smooth glass.
     let mut diffuse: Option<SurfaceInteraction> = None;
     if set.contains(Aov::Albedo) || set.contains(Aov::Normal) {
@@ -236,7 +237,7 @@ pub fn aov_sample(scene: &Scene, ray: &Ray, set: AovSet, out: &mut [f32], stats:
             Aov::Depth => &[(first.p - ray.o).norm()],
             Aov::Position => &[first.p.x, first.p.y, first.p.z],
             Aov::Uv => &[first.uv.x, first.uv.y],
-            Aov::Shape => &[scene.geometry.shape_index(first.prim) as f32],
+            Aov::Shape => &[scene.shape_index(&hit) as f32],
             // The antialiased emission starts as the sample's own (the caller refines it at
             // the edges of lights).
             Aov::Emission | Aov::EmissionAa => &{

@@ -3,12 +3,29 @@
 //!
 //! Primitive ids list the bounded primitives first (analytic shapes and every mesh triangle
 //! individually: the ones the acceleration structures hold), then the unbounded ones (planes,
-//! tested one by one). Hits are resolved into [`SurfaceInteraction`]s here too, so that
-//! everything above the accelerators sees one surface type.
+//! tested one by one), then the [`Instance`]s: placements of a shared group of shapes (a
+//! `Geometry` of its own, behind an [`Arc`], in the group's space). The groups' own
+//! acceleration structures and the top level over the instances are built above this layer
+//! (`crate::instance`); hits in instances are resolved here like any other. Hits are resolved
+//! into [`SurfaceInteraction`]s here too, so that everything above the accelerators sees one
+//! surface type.
+
+use std::sync::Arc;
 
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
-use crate::math::{Bounds3, Ray};
+use crate::math::{Bounds3, Ray, Transform};
 use crate::shape::{Mesh, Shape, ShapeHit, ShearedRay};
+
+/// A placement of a shared group of shapes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// The group (index into [`Geometry::groups`]).
+    pub group: u32,
+    /// Group space → world (with its inverse).
+    pub to_world: Transform,
+    /// The shape index (the `shape` output variable) of the group's first shape here.
+    pub first_shape: u32,
+}
 
 /// A shape with its surface properties.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,12 +59,48 @@ pub struct Geometry {
     meshes: Vec<Mesh>,
     prims: Vec<PrimRef>,
     bounded: u32,
+    /// Shared groups (each without instances of its own).
+    groups: Vec<Arc<Geometry>>,
+    /// The bounds of each group, in its space.
+    group_bounds: Vec<Bounds3>,
+    /// Placements of the groups.
+    instances: Vec<Instance>,
 }
 
 impl Geometry {
-    /// Gathers objects and meshes; primitive ids list bounded objects, then every mesh
-    /// triangle, then unbounded objects.
+    /// Gathers objects and meshes, without instances; primitive ids list bounded objects, then
+    /// every mesh triangle, then unbounded objects.
     pub fn new(objects: Vec<Object>, meshes: Vec<Mesh>) -> Self {
+        Self::with_instances(objects, meshes, Vec::new(), Vec::new())
+    }
+
+    /// Gathers objects, meshes and instances of `groups` (whose `first_shape` is set here: the
+    /// shapes of the instances are numbered after the objects and meshes, in order). A group
+    /// holds bounded shapes only and no instances; an instance names an existing group.
+    pub fn with_instances(
+        objects: Vec<Object>,
+        meshes: Vec<Mesh>,
+        groups: Vec<Arc<Geometry>>,
+        mut instances: Vec<Instance>,
+    ) -> Self {
+        debug_assert!(groups
+            .iter()
+            .all(|g| g.instances.is_empty() && g.bounded == g.prims.len() as u32));
+        let mut next = (objects.len() + meshes.len()) as u32;
+        for inst in &mut instances {
+            inst.first_shape = next;
+            let g = &groups[inst.group as usize];
+            next = next.saturating_add((g.objects.len() + g.meshes.len()) as u32);
+        }
+        let mut g = Self::own(objects, meshes);
+        g.group_bounds = groups.iter().map(|g| g.bounds()).collect();
+        g.groups = groups;
+        g.instances = instances;
+        g
+    }
+
+    /// Objects and meshes alone.
+    fn own(objects: Vec<Object>, meshes: Vec<Mesh>) -> Self {
         let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
             (0..objects.len() as u32).partition(|&i| objects[i as usize].shape.bounds().is_some());
         let mut prims: Vec<PrimRef> = bounded.into_iter().map(PrimRef::Object).collect();
@@ -64,6 +117,30 @@ impl Geometry {
             meshes,
             prims,
             bounded: n,
+            groups: Vec::new(),
+            group_bounds: Vec::new(),
+            instances: Vec::new(),
+        }
+    }
+
+    /// The shared groups of the instances.
+    pub fn groups(&self) -> &[Arc<Geometry>] {
+        &self.groups
+    }
+
+    /// The instances; instance `i` has the primitive id `prim_count() + i`.
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    /// World bounds of instance `i` (its group's bounds, transformed).
+    pub fn instance_bounds(&self, i: u32) -> Bounds3 {
+        let inst = &self.instances[i as usize];
+        let b = self.group_bounds[inst.group as usize];
+        if b.is_empty() {
+            b
+        } else {
+            b.transform(&inst.to_world)
         }
     }
 
@@ -73,12 +150,17 @@ impl Geometry {
         self.bounded
     }
 
-    /// The index of the shape primitive `prim` belongs to: objects first (in the order given),
-    /// then meshes.
-    pub fn shape_index(&self, prim: u32) -> u32 {
-        match self.prims[prim as usize] {
-            PrimRef::Object(i) => i,
-            PrimRef::Triangle { mesh, .. } => self.objects.len() as u32 + mesh,
+    /// The index of the shape primitive `prim` belongs to (`inner`: the primitive in the
+    /// group of an instance, see [`Hit::leaf`]): objects first (in the order given), then
+    /// meshes, then the shapes of each instance.
+    pub fn shape_index(&self, prim: u32, inner: u32) -> u32 {
+        match self.prims.get(prim as usize) {
+            Some(PrimRef::Object(i)) => *i,
+            Some(PrimRef::Triangle { mesh, .. }) => self.objects.len() as u32 + mesh,
+            None => {
+                let inst = &self.instances[(prim - self.prims.len() as u32) as usize];
+                inst.first_shape + self.groups[inst.group as usize].shape_index(inner, 0)
+            }
         }
     }
 
@@ -131,9 +213,10 @@ impl Geometry {
         }
     }
 
-    /// Bounds of all bounded primitives.
+    /// Bounds of all bounded primitives and instances.
     pub fn bounds(&self) -> Bounds3 {
-        (0..self.bounded).fold(Bounds3::EMPTY, |b, p| b.union(self.prim_bounds(p)))
+        let own = (0..self.bounded).fold(Bounds3::EMPTY, |b, p| b.union(self.prim_bounds(p)));
+        (0..self.instances.len() as u32).fold(own, |b, i| b.union(self.instance_bounds(i)))
     }
 
     /// The full interaction for a hit found along `ray`.
@@ -145,7 +228,10 @@ impl Geometry {
             sub: hit.sub,
             leaf: hit.leaf,
         };
-        let (g, props, frame) = match self.prims[hit.prim as usize] {
+        let Some(&prim) = self.prims.get(hit.prim as usize) else {
+            return self.instance_interaction(ray, hit);
+        };
+        let (g, props, frame) = match prim {
             PrimRef::Object(o) => {
                 let obj = &self.objects[o as usize];
                 match &obj.shape {
@@ -182,5 +268,54 @@ impl Geometry {
             props,
             frame,
         }
+    }
+
+    /// [`Geometry::interaction`] for a hit in an instance: the group's interaction along the
+    /// ray brought into group space, moved back to the world (points and tangents by the
+    /// placement, normals by its inverse transpose).
+    #[cold]
+    #[inline(never)]
+    fn instance_interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        let inst = &self.instances[(hit.prim - self.prims.len() as u32) as usize];
+        let group = &self.groups[inst.group as usize];
+        let t = &inst.to_world;
+        let local = Ray {
+            o: t.inv_point(ray.o),
+            d: t.inv_vector(ray.d),
+            tmin: ray.tmin,
+            tmax: ray.tmax,
+        };
+        let inner = Hit {
+            prim: hit.leaf,
+            leaf: 0,
+            ..*hit
+        };
+        let mut si = group.interaction(&local, &inner);
+        si.prim = hit.prim;
+        if t.is_identity() {
+            return si;
+        }
+        let unit = |n: crate::math::Normal3, fallback: crate::math::Normal3| {
+            let n = t.normal(n);
+            let len = n.to_vec().norm();
+            if len > 0.0 && len.is_finite() {
+                n / len
+            } else {
+                fallback
+            }
+        };
+        si.p = t.point(si.p);
+        si.n = unit(si.n, si.n);
+        si.ns = unit(si.ns, si.n);
+        // The geometric normal stays on the side of the shading normal (as `Mesh::geometry`
+        // keeps it), which a non-uniform scaling could otherwise break.
+        if si.n.dot_vec(si.ns.to_vec()) < 0.0 {
+            si.n = -si.n;
+        }
+        si.dpdu = t.vector(si.dpdu);
+        si.wo = -ray.d.normalize();
+        // Flat shapes' ready frames do not survive a non-uniform scaling: computed on demand.
+        si.frame = None;
+        si
     }
 }

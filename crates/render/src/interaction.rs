@@ -36,7 +36,8 @@ pub struct Hit {
     pub uv: [f32; 2],
     /// Primitive-specific index.
     pub sub: u32,
-    /// For CSG: the leaf hit.
+    /// For CSG: the leaf hit. In an instance (`prim` is then the instance's id): the
+    /// primitive hit in the shared geometry of its group (groups hold no CSG).
     pub leaf: u32,
 }
 

@@ -13,6 +13,7 @@ pub mod film;
 pub mod filter;
 pub mod geometry;
 pub mod image;
+pub mod instance;
 pub mod integrator;
 pub mod interaction;
 pub mod light;

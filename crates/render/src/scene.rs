@@ -4,7 +4,8 @@
 use crate::accel::{Accel, AccelKind, BatchHits};
 use crate::camera::Camera;
 use crate::color::Rgb;
-use crate::geometry::{Geometry, Object};
+use crate::geometry::{Geometry, Instance, Object};
+use crate::instance::Instances;
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::light::{AreaLight, Emission, Light};
 use crate::material::{Material, MaterialId};
@@ -13,6 +14,7 @@ use crate::sampling::pcg::hash2;
 use crate::shape::{Mesh, Shape, ShearedRay};
 use crate::spectrum::{upsample, RgbRole, SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
+use std::sync::Arc;
 
 /// A scene ready to render.
 #[derive(Clone, Debug)]
@@ -23,6 +25,8 @@ pub struct Scene {
     pub geometry: Geometry,
     /// The acceleration structure over `geometry`.
     pub accel: Accel,
+    /// The two-level structure of `geometry`'s instances (empty without instances).
+    pub instances: Instances,
     /// Materials, indexed by [`MaterialId`].
     pub materials: Vec<Material>,
     /// Emitters, indexed by [`SurfaceProps::emission`].
@@ -141,6 +145,10 @@ impl Scene {
     fn intersect_opaque(&self, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         stats.rays += 1;
         let mut best = self.accel.intersect(&self.geometry, ray, stats);
+        if !self.instances.is_empty() {
+            self.instances
+                .intersect(&self.geometry, ray, &mut best, stats);
+        }
         if self.geometry.bounded_count() == self.geometry.prim_count() {
             return best;
         }
@@ -175,6 +183,7 @@ impl Scene {
             stats.prim_tests += 1;
             self.geometry.intersect_prim(p, ray, &sr).is_some()
         }) || self.accel.occluded(&self.geometry, ray, stats)
+            || (!self.instances.is_empty() && self.instances.occluded(&self.geometry, ray, stats))
     }
 
     /// The closest hit of every active lane of `rays`: the hits [`Scene::intersect`] gives ray
@@ -184,6 +193,12 @@ impl Scene {
         stats.rays += rays.active.count_ones() as u64;
         self.accel
             .intersect_batch(&self.geometry, rays, hits, stats);
+        if !self.instances.is_empty() {
+            for i in rays.lanes() {
+                self.instances
+                    .intersect(&self.geometry, &rays.ray(i), &mut hits[i], stats);
+            }
+        }
         if self.geometry.bounded_count() != self.geometry.prim_count() {
             self.intersect_unbounded_batch(rays, hits, stats);
         }
@@ -250,6 +265,14 @@ impl Scene {
         if rest.active != 0 {
             hit |= self.accel.occluded_batch(&self.geometry, &rest, stats);
         }
+        if !self.instances.is_empty() {
+            let open = rays.active & !hit;
+            for i in rays.lanes().filter(|&i| open & (1 << i) != 0) {
+                if self.instances.occluded(&self.geometry, &rays.ray(i), stats) {
+                    hit |= 1 << i;
+                }
+            }
+        }
         hit
     }
 
@@ -273,6 +296,13 @@ impl Scene {
         Some(self.geometry.interaction(ray, &h))
     }
 
+    /// The shape index (the `shape` output variable) of a hit (in an instance, the hit knows
+    /// the group's shape; the interaction does not).
+    #[inline]
+    pub fn shape_index(&self, hit: &Hit) -> u32 {
+        self.geometry.shape_index(hit.prim, hit.leaf)
+    }
+
     /// The material of an interaction.
     #[inline]
     pub fn material(&self, si: &SurfaceInteraction) -> &Material {
@@ -290,12 +320,40 @@ impl Scene {
     }
 }
 
+/// Why [`SceneBuilder::add_group`] refused a group: the index of the offending shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GroupError {
+    /// An unbounded shape (a plane).
+    Unbounded(usize),
+    /// An emitting shape.
+    Emitter(usize),
+    /// A CSG shape (its hits use the field that instances use, `Hit::leaf`).
+    Csg(usize),
+}
+
+impl std::fmt::Display for GroupError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GroupError::Unbounded(_) => {
+                write!(f, "a shape group cannot hold unbounded shapes (planes)")
+            }
+            GroupError::Csg(_) => write!(f, "a shape group cannot hold CSG shapes"),
+            GroupError::Emitter(_) => write!(
+                f,
+                "a shape group cannot hold emitters (instanced emitters are not supported, as in Mitsuba 3)"
+            ),
+        }
+    }
+}
+
 /// Collects the parts of a scene and builds it.
 #[derive(Clone, Debug)]
 pub struct SceneBuilder {
     camera: Option<Camera>,
     objects: Vec<Object>,
     meshes: Vec<Mesh>,
+    groups: Vec<Arc<Geometry>>,
+    instances: Vec<Instance>,
     materials: Vec<Material>,
     emissions: Vec<Emission>,
     background: Rgb,
@@ -316,6 +374,8 @@ impl SceneBuilder {
             camera: None,
             objects: Vec::new(),
             meshes: Vec::new(),
+            groups: Vec::new(),
+            instances: Vec::new(),
             materials: Vec::new(),
             emissions: Vec::new(),
             background: Rgb::BLACK,
@@ -413,10 +473,61 @@ impl SceneBuilder {
         self
     }
 
+    /// Adds a group of shapes to be placed by [`SceneBuilder::add_instance`] (and not
+    /// otherwise), in its own space, and returns its index. Each shape is given as
+    /// `(shape, material)`; meshes carry their material. A group holds bounded shapes that
+    /// emit nothing (as in Mitsuba, whose shape groups refuse emitters) and are not CSG; the
+    /// error says which rule a shape breaks (its index among `shapes`, then `meshes`). Empty
+    /// meshes are dropped.
+    pub fn add_group(
+        &mut self,
+        shapes: Vec<(Shape, MaterialId)>,
+        meshes: Vec<Mesh>,
+    ) -> Result<u32, GroupError> {
+        for (i, (s, _)) in shapes.iter().enumerate() {
+            if s.bounds().is_none() {
+                return Err(GroupError::Unbounded(i));
+            }
+            if matches!(s, Shape::Csg(_)) {
+                return Err(GroupError::Csg(i));
+            }
+        }
+        for (i, m) in meshes.iter().enumerate() {
+            if m.props.emission.is_some() || m.props.light.is_some() {
+                return Err(GroupError::Emitter(shapes.len() + i));
+            }
+        }
+        let objects = shapes
+            .into_iter()
+            .map(|(shape, material)| Object {
+                shape,
+                props: SurfaceProps::new(material),
+            })
+            .collect();
+        let meshes = meshes.into_iter().filter(|m| !m.is_empty()).collect();
+        self.groups.push(Arc::new(Geometry::new(objects, meshes)));
+        Ok((self.groups.len() - 1) as u32)
+    }
+
+    /// Places group `group` (from [`SceneBuilder::add_group`]) by `to_world`; its geometry is
+    /// shared, not copied. A group index that does not exist is ignored.
+    pub fn add_instance(&mut self, group: u32, to_world: Transform) -> &mut Self {
+        if (group as usize) < self.groups.len() {
+            self.instances.push(Instance {
+                group,
+                to_world,
+                first_shape: 0,
+            });
+        }
+        self
+    }
+
     /// Builds the scene with the acceleration structure `accel`. Without a camera, the
     /// course's default is used: perspective, distance 1, aspect 4/3, at the origin.
     pub fn build(self, accel: AccelKind) -> Scene {
-        let geometry = Geometry::new(self.objects, self.meshes);
+        let geometry =
+            Geometry::with_instances(self.objects, self.meshes, self.groups, self.instances);
+        let instances = Instances::build(accel, &geometry);
         let accel = Accel::build(accel, &geometry);
         let has_masks = self.materials.iter().any(|m| m.opacity.is_some());
         Scene {
@@ -425,6 +536,7 @@ impl SceneBuilder {
                 .unwrap_or_else(|| Camera::perspective(1.0, 4.0 / 3.0, Transform::IDENTITY)),
             geometry,
             accel,
+            instances,
             materials: self.materials,
             emissions: self.emissions,
             background: self.background,

@@ -12,7 +12,7 @@ use crate::lang::ast::{
     self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind, SpectrumDef,
     MAX_SPECTRUM_SAMPLES,
 };
-use crate::loaded::{check_mesh_memory, MAX_CSG_NODES, MAX_SHAPES};
+use crate::loaded::{check_mesh_memory, INSTANCE_BYTES, MAX_CSG_NODES, MAX_SHAPES};
 use candela_imageio::Limits;
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
@@ -67,6 +67,8 @@ pub fn build_scene(
         images: HashMap::new(),
         spectra: HashMap::new(),
         meshes: HashMap::new(),
+        groups: HashMap::new(),
+        instances: 0,
         report: BuildReport::default(),
         mesh_bytes: 0.0,
     };
@@ -94,6 +96,10 @@ struct Builder<'a> {
     /// Spectrum files read so far.
     spectra: HashMap<PathBuf, Arc<Spectrum>>,
     meshes: HashMap<PathBuf, Arc<Mesh>>,
+    /// Shared groups of meshes placed through instances: (file, material) → group.
+    groups: HashMap<(PathBuf, MaterialId), u32>,
+    /// Instances of those groups placed so far.
+    instances: usize,
     report: BuildReport,
     mesh_bytes: f64,
 }
@@ -630,6 +636,11 @@ impl Builder<'_> {
                 let (m, e) = self.props(material);
                 let t = place(self, transform)?;
                 let source = self.mesh(file)?;
+                if depth > 0 && e.is_none() {
+                    // Reached through instance(…): the file's mesh is shared by every placement
+                    // with this material (two-level ray tracing), not copied.
+                    return self.add_mesh_instance(&source, file, m, t, shape.pos);
+                }
                 self.count_mesh(&source, shape.pos)?;
                 let mut mesh = source.transformed(&t);
                 mesh.props.material = m;
@@ -653,11 +664,49 @@ impl Builder<'_> {
         Ok(())
     }
 
+    /// Places the mesh `source` (from `file`) with material `material` by `t` as an instance of
+    /// a shared group, made on its first placement.
+    fn add_mesh_instance(
+        &mut self,
+        source: &Mesh,
+        file: &ast::FileRef,
+        material: MaterialId,
+        t: Transform,
+        pos: Pos,
+    ) -> Result<(), SceneError> {
+        let key = (self.locate(file, "mesh")?, material);
+        let group = match self.groups.get(&key) {
+            Some(&g) => g,
+            None => {
+                self.count_mesh(source, pos)?;
+                let mut mesh = source.clone();
+                mesh.props.material = material;
+                self.report.triangles += mesh.len();
+                self.mesh_bytes += crate::mesh::bytes_per_triangle(&mesh) * mesh.len() as f64;
+                let g = self
+                    .scene
+                    .add_group(Vec::new(), vec![mesh])
+                    .map_err(|e| self.err(pos, e.to_string()))?;
+                self.groups.insert(key, g);
+                g
+            }
+        };
+        self.instances += 1;
+        check_mesh_memory(
+            self.mesh_bytes + self.instances as f64 * INSTANCE_BYTES,
+            self.report.triangles,
+            &self.limits,
+        )
+        .map_err(|e| self.err(pos, e))?;
+        self.scene.add_instance(group, t);
+        Ok(())
+    }
+
     /// Fails before `mesh` is copied once more when the copy would exceed the memory limit.
     fn count_mesh(&self, mesh: &Mesh, pos: Pos) -> Result<(), SceneError> {
         let bytes = crate::mesh::bytes_per_triangle(mesh) * mesh.len() as f64;
         check_mesh_memory(
-            self.mesh_bytes + bytes,
+            self.mesh_bytes + bytes + self.instances as f64 * INSTANCE_BYTES,
             self.report.triangles + mesh.len(),
             &self.limits,
         )

@@ -75,6 +75,9 @@ pub const MAX_CSG_NODES: usize = 1 << 16;
 pub const MESH_MEMORY_FRACTION: f64 = 0.5;
 /// Bytes of acceleration structure per triangle, added to the mesh data in the estimate.
 pub const ACCEL_BYTES_PER_TRIANGLE: f64 = 64.0;
+/// Bytes per instance of a shared group (its placement, inverse, top-level node), counted in
+/// the mesh memory estimate instead of a copy of the group.
+pub const INSTANCE_BYTES: f64 = 256.0;
 
 /// Fails with a message naming the limit when `bytes` of meshes exceed what `limits` allow.
 pub fn check_mesh_memory(bytes: f64, triangles: usize, limits: &Limits) -> Result<(), String> {
@@ -82,7 +85,7 @@ pub fn check_mesh_memory(bytes: f64, triangles: usize, limits: &Limits) -> Resul
     let max = limits.max_memory as f64 * MESH_MEMORY_FRACTION;
     if total > max {
         Err(format!(
-            "the meshes placed so far ({triangles} triangles, every copy counted) need about {:.0} MB, more than half of --max-memory ({:.0} MB); raise --max-memory or place fewer copies",
+            "the meshes placed so far ({triangles} triangles, every copy counted; instances of shared groups count {INSTANCE_BYTES} bytes each) need about {:.0} MB, more than half of --max-memory ({:.0} MB); raise --max-memory or place fewer copies",
             total / 1e6,
             limits.max_memory as f64 / 1e6
         ))

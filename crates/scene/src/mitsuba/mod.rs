@@ -163,6 +163,8 @@ fn load_tree(
         textures: HashMap::new(),
         images: HashMap::new(),
         meshes: HashMap::new(),
+        groups: HashMap::new(),
+        instances: 0,
         active: Vec::new(),
         has_sensor: false,
         triangles: 0,
@@ -281,6 +283,10 @@ struct Loader<'t> {
     /// Mesh files (serialized ones as `file/@index`) → the mesh and whether the file asks for
     /// face normals.
     meshes: HashMap<PathBuf, Arc<(Mesh, bool)>>,
+    /// Shapegroup element → group index in the scene.
+    groups: HashMap<usize, u32>,
+    /// Instances placed so far.
+    instances: usize,
     /// Elements being built (to report circular references).
     active: Vec<usize>,
     has_sensor: bool,

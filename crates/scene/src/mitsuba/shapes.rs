@@ -11,6 +11,13 @@
 //!   `flip_tex_coords` (OBJ, default true); meshes without normals get Mitsuba's angle-weighted
 //!   vertex normals unless `face_normals` is set.
 //!
+//! - `shapegroup` (with an `id`): shapes (any of the above, each with its own `to_world` and
+//!   BSDF) built once into a shared group with its own acceleration structure; it renders
+//!   nothing by itself. Emitters and nested shapegroups or instances are refused, as in
+//!   Mitsuba 3.
+//! - `instance`: a `<ref>` to a shapegroup and a `to_world`: the group placed again, its
+//!   geometry shared (two-level ray tracing, `candela_render::instance`).
+//!
 //! Mitsuba normals transform by the inverse transpose of `to_world`.
 
 use super::math::M4;
@@ -23,10 +30,125 @@ use candela_render::shape::{Cube, Cylinder, Disk, Mesh, Parallelogram, Shape, Sp
 use std::sync::Arc;
 
 impl<'t> Loader<'t> {
-    /// A `<shape>`.
+    /// A `<shape>`: placed in the world, except a `shapegroup` (built, placed only by
+    /// instances).
     pub(super) fn shape(&mut self, e: &'t Element) -> Result<(), SceneError> {
+        match e.kind() {
+            "shapegroup" => self.shape_group(e).map(|_| ()),
+            "instance" => self.instance(e),
+            _ => {
+                let (shape, material, emission) = self.build_shape(e, false)?;
+                match shape {
+                    Built::Shape(s) => {
+                        self.scene.add_shape(s, material, emission);
+                    }
+                    Built::Mesh(m) => self.add_mesh(m, material, emission),
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// A `shapegroup`'s shared geometry (built once, however many instances refer to it):
+    /// its group index. Its shapes keep their own `to_world` (group space) and BSDFs; emitters
+    /// and nested groups or instances are refused, as in Mitsuba 3.
+    fn shape_group(&mut self, e: &'t Element) -> Result<u32, SceneError> {
+        if let Some(&g) = self.groups.get(&e.key()) {
+            return Ok(g);
+        }
+        self.enter(e)?;
+        let p = self.props(e)?;
+        let (mut shapes, mut meshes) = (Vec::new(), Vec::new());
+        for (c, pos) in p.objects("shape") {
+            if matches!(c.kind(), "shapegroup" | "instance") {
+                return Err(p.error(
+                    pos,
+                    format!(
+                        "nested instancing is not supported: a shapegroup cannot contain {}",
+                        c.describe()
+                    ),
+                ));
+            }
+            match self.build_shape(c, true)? {
+                (Built::Shape(s), material, _) => shapes.push((s, material)),
+                (Built::Mesh(mut m), material, _) => {
+                    m.props.material = material;
+                    self.triangles += m.len();
+                    self.mesh_bytes += crate::mesh::bytes_per_triangle(&m) * m.len() as f64;
+                    meshes.push(m);
+                }
+            }
+        }
+        if shapes.is_empty() && meshes.is_empty() {
+            self.warn(e.pos, "the shapegroup has no shapes");
+        }
+        self.finish(&p);
+        let g = self
+            .scene
+            .add_group(shapes, meshes)
+            .map_err(|err| self.err(e.pos, err.to_string()))?;
+        self.leave();
+        self.groups.insert(e.key(), g);
+        Ok(g)
+    }
+
+    /// An `instance`: a `<ref>` to a shapegroup placed by `to_world`, sharing its geometry.
+    fn instance(&mut self, e: &'t Element) -> Result<(), SceneError> {
+        let p = self.props(e)?;
+        if let Some((_, pos)) = p.objects("emitter").first() {
+            return Err(p.error(
+                *pos,
+                "an instance cannot have an emitter (instanced emitters are not supported, as in Mitsuba 3)",
+            ));
+        }
+        let targets = p.objects("shape");
+        let Some(&(target, pos)) = targets.first() else {
+            return Err(p.error(
+                e.pos,
+                "an instance needs a <ref id=\"...\"/> to a shapegroup",
+            ));
+        };
+        if let Some((_, second)) = targets.get(1) {
+            return Err(p.error(*second, "an instance refers to a single shapegroup"));
+        }
+        if target.kind() != "shapegroup" {
+            return Err(p.error(
+                pos,
+                format!(
+                    "an instance must refer to a shapegroup, not {}",
+                    target.describe()
+                ),
+            ));
+        }
+        let group = self.shape_group(target)?;
+        let (_, t) = self.to_world(&p)?;
+        self.instances += 1;
+        crate::loaded::check_mesh_memory(
+            self.mesh_bytes + self.instances as f64 * crate::loaded::INSTANCE_BYTES,
+            self.triangles,
+            &self.limits,
+        )
+        .map_err(|msg| self.err(e.pos, msg))?;
+        self.finish(&p);
+        self.scene.add_instance(group, t);
+        Ok(())
+    }
+
+    /// The shape of a `<shape>` element with its material and emission (`grouped`: inside a
+    /// shapegroup, where emitters are refused).
+    fn build_shape(
+        &mut self,
+        e: &'t Element,
+        grouped: bool,
+    ) -> Result<(Built, u32, Option<u32>), SceneError> {
         let p = self.props(e)?;
         let emitter = p.object("emitter")?;
+        if let (true, Some((_, pos))) = (grouped, emitter) {
+            return Err(p.error(
+                pos,
+                "a shapegroup cannot contain emitters (instanced emitters are not supported, as in Mitsuba 3)",
+            ));
+        }
         let material = match p.object("bsdf")? {
             Some((b, _)) => self.material(b)?,
             None => self.default_material(emitter.is_some()),
@@ -206,18 +328,12 @@ impl<'t> Loader<'t> {
             other => {
                 return Err(p.error(
                     e.pos,
-                    format!("unsupported shape '{other}' (supported: sphere, rectangle, disk, cube, cylinder, obj, ply, serialized)"),
+                    format!("unsupported shape '{other}' (supported: sphere, rectangle, disk, cube, cylinder, obj, ply, serialized, shapegroup, instance)"),
                 ))
             }
         };
         self.finish(&p);
-        match shape {
-            Built::Shape(s) => {
-                self.scene.add_shape(s, material, emission);
-            }
-            Built::Mesh(m) => self.add_mesh(m, material, emission),
-        }
-        Ok(())
+        Ok((shape, material, emission))
     }
 
     /// Adds a triangle mesh with its material and emission.

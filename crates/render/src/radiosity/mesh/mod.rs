@@ -207,6 +207,12 @@ impl Meshing {
                 "radiosity: {csg} CSG object(s) are not meshed into patches: they are shown black and do not block light in hemicube form factors"
             ));
         }
+        let instances = scene.geometry.instances().len();
+        if instances > 0 {
+            m.warnings.push(format!(
+                "radiosity: {instances} instance(s) of shape groups are not meshed into patches: they are shown black and do not block light in hemicube form factors"
+            ));
+        }
         if glossy > 0 {
             m.warnings.push(format!(
                 "radiosity: {glossy} surface(s) with glossy materials (phong, cook_torrance, plastic) are approximated by their diffuse part"
