@@ -109,6 +109,34 @@ fn any_split_merges_into_the_bytes_of_one_render() {
     assert_eq!(std::fs::read(dir.join("mm.pfm")).unwrap(), reference_pfm);
 }
 
+/// Spectral renders split and merge into the same bytes too (the wavelengths come from each
+/// sample's own numbers), on any thread count; a spectral part and an RGB part do not merge.
+#[test]
+fn spectral_splits_merge_into_the_bytes_of_one_render() {
+    let dir = scratch("farm-spectral");
+    let reference = {
+        let p = dir.join("whole.pfm");
+        let mut args = vec!["demo", "-q", "--spectral", "--threads", "2", "-o", s(&p)];
+        args.extend(FRAME);
+        run_ok(&args);
+        std::fs::read(p).unwrap()
+    };
+    let a = demo_part(
+        &dir,
+        "a.part",
+        &["--spectral", "--samples", "0..8", "--threads", "1"],
+    );
+    let b = demo_part(&dir, "b.part", &["--spectral", "--samples", "8..24"]);
+    let o = merge(&dir, &[&a, &b], "m.pfm", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(dir.join("m.pfm")).unwrap(), reference);
+    let rgb = demo_part(&dir, "rgb.part", &["--samples", "8..24"]);
+    let o = merge(&dir, &[&a, &rgb], "x.pfm", &[]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("spectral"), "{}", stderr(&o));
+    assert!(!dir.join("x.pfm").exists());
+}
+
 #[test]
 fn merge_refuses_what_does_not_fit_and_writes_nothing() {
     let dir = scratch("farm-refusals");
