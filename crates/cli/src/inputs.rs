@@ -130,12 +130,8 @@ pub fn default_output(scene: &Path) -> String {
 
 /// `--spectral` with an integrator that computes colours (radiosity, the preview views) is a
 /// usage error.
-pub fn spectral_integrator(a: &RenderArgs, kind: IntegratorKind) -> Result<(), Usage> {
+pub fn spectral_integrator(a: &RenderArgs, kind: IntegratorKind, name: &str) -> Result<(), Usage> {
     if a.spectral && !kind.spectral() {
-        let name = IntegratorKind::NAMES[IntegratorKind::NAMES
-            .iter()
-            .position(|n| IntegratorKind::from_name(n) == Some(kind))
-            .unwrap_or(0)];
         return Err(Usage(format!(
             "--spectral: the {name} integrator computes colours, not radiance per wavelength (spectral rendering is for path, direct, local and whitted)"
         )));
@@ -189,8 +185,8 @@ fn render_args(a: &RenderArgs, xml: bool) -> Result<(), Usage> {
             return Err(Usage(format!("--define '{d}': the name is empty")));
         }
     }
-    if let Some(kind) = integrator {
-        spectral_integrator(a, kind)?;
+    if let (Some(kind), Some(name)) = (integrator, &a.integrator) {
+        spectral_integrator(a, kind, name)?;
     }
     // Depths: an XML scene may set the integrator and its depth, checked when it is loaded.
     let kind = integrator.or((!xml).then_some(IntegratorKind::Path));

@@ -318,7 +318,7 @@ fn render_frame(
         spectral: args.spectral,
     };
     if args.spectral {
-        crate::inputs::spectral_integrator(args, kind)?;
+        crate::inputs::spectral_integrator(args, kind, name)?;
         loaded.scene.prepare_spectral();
     }
     crate::inputs::check_render(settings.width, settings.height, args)?;

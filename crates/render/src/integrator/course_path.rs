@@ -6,7 +6,7 @@
 //! [`MAX_BRANCHING_DEPTH`], which also bounds the recursion) and a camera sample traces at most
 //! [`BRANCHING_RAY_BUDGET`] rays: branches beyond the budget are cut (they contribute nothing).
 
-use super::Integrator;
+use super::{Integrator, Recursion};
 use crate::math::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -38,11 +38,10 @@ impl Integrator for CoursePath {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum {
-        let mut budget = BRANCHING_RAY_BUDGET;
-        let mut t = Branches {
+        let mut t = Recursion {
             scene,
             lambda,
-            budget: &mut budget,
+            budget: BRANCHING_RAY_BUDGET,
             sampler,
             stats,
         };
@@ -50,22 +49,12 @@ impl Integrator for CoursePath {
     }
 }
 
-/// What the branches share: the scene, the sample's wavelengths (a dispersive interface
-/// anywhere in the tree keeps only the hero), the ray budget, the sampler and the counters.
-struct Branches<'a> {
-    scene: &'a Scene,
-    lambda: &'a mut Wavelengths,
-    budget: &'a mut u32,
-    sampler: &'a mut Sampler,
-    stats: &'a mut RayStats,
-}
-
 impl CoursePath {
-    fn trace(&self, t: &mut Branches, ray: &Ray, depth: u32) -> SampledSpectrum {
-        if depth > self.max_depth.min(MAX_BRANCHING_DEPTH) || *t.budget == 0 {
+    fn trace(&self, t: &mut Recursion, ray: &Ray, depth: u32) -> SampledSpectrum {
+        if depth > self.max_depth.min(MAX_BRANCHING_DEPTH) || t.budget == 0 {
             return SampledSpectrum::ZERO;
         }
-        *t.budget -= 1;
+        t.budget -= 1;
         let scene = t.scene;
         let Some(si) = scene.interact(ray, t.stats) else {
             return scene.escaped(ray.d.normalize(), t.lambda);

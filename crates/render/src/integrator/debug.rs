@@ -24,7 +24,12 @@ pub struct Normals;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Depth;
 
-impl Integrator for OnOff {
+/// A preview view: a colour per camera ray, computed in RGB (no wavelengths, no samples).
+trait View: Sync {
+    fn colour(&self, scene: &Scene, ray: &Ray, stats: &mut RayStats) -> Rgb;
+}
+
+impl<V: View> Integrator for V {
     fn radiance(
         &self,
         scene: &Scene,
@@ -33,80 +38,54 @@ impl Integrator for OnOff {
         _: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum {
-        SampledSpectrum::from_rgb(match scene.intersect(ray, stats) {
-            Some(_) => Rgb::WHITE,
-            None => Rgb::BLACK,
-        })
+        SampledSpectrum::from_rgb(self.colour(scene, ray, stats))
     }
 
+    /// A view is a colour, not radiance per wavelength.
     fn spectral(&self) -> bool {
         false
     }
 }
 
-impl Integrator for Flat {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        _: &mut Wavelengths,
-        _: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> SampledSpectrum {
-        SampledSpectrum::from_rgb(match scene.interact(ray, stats) {
+impl View for OnOff {
+    fn colour(&self, scene: &Scene, ray: &Ray, stats: &mut RayStats) -> Rgb {
+        match scene.intersect(ray, stats) {
+            Some(_) => Rgb::WHITE,
+            None => Rgb::BLACK,
+        }
+    }
+}
+
+impl View for Flat {
+    fn colour(&self, scene: &Scene, ray: &Ray, stats: &mut RayStats) -> Rgb {
+        match scene.interact(ray, stats) {
             Some(si) => {
                 scene.material(&si).base_color(si.uv)
                     + scene.emitted(&si, &Wavelengths::Rgb).to_rgb()
             }
             None => scene.background,
-        })
-    }
-
-    fn spectral(&self) -> bool {
-        false
+        }
     }
 }
 
-impl Integrator for Normals {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        _: &mut Wavelengths,
-        _: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> SampledSpectrum {
-        SampledSpectrum::from_rgb(match scene.interact(ray, stats) {
+impl View for Normals {
+    fn colour(&self, scene: &Scene, ray: &Ray, stats: &mut RayStats) -> Rgb {
+        match scene.interact(ray, stats) {
             Some(si) => {
                 let n = si.facing_shading_normal();
                 Rgb::new((n.x + 1.0) * 0.5, (n.y + 1.0) * 0.5, (n.z + 1.0) * 0.5)
             }
             None => Rgb::BLACK,
-        })
-    }
-
-    fn spectral(&self) -> bool {
-        false
+        }
     }
 }
 
-impl Integrator for Depth {
-    fn radiance(
-        &self,
-        scene: &Scene,
-        ray: &Ray,
-        _: &mut Wavelengths,
-        _: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> SampledSpectrum {
-        SampledSpectrum::from_rgb(match scene.intersect(ray, stats) {
+impl View for Depth {
+    fn colour(&self, scene: &Scene, ray: &Ray, stats: &mut RayStats) -> Rgb {
+        match scene.intersect(ray, stats) {
             Some(h) => Rgb::splat(h.t * ray.d.norm()),
             None => Rgb::BLACK,
-        })
-    }
-
-    fn spectral(&self) -> bool {
-        false
+        }
     }
 }
 
@@ -144,56 +123,19 @@ mod tests {
     fn preview_values_by_hand() {
         let s = one_sphere();
         let mut st = RayStats::default();
-        let mut sm = Sampler::new(0, 0);
         let hit = Ray::new(Point3::ORIGIN, Vec3::X);
         let miss = Ray::new(Point3::ORIGIN, Vec3::Y);
-        assert_eq!(
-            OnOff
-                .radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
-            Rgb::WHITE
-        );
-        assert_eq!(
-            OnOff
-                .radiance(&s, &miss, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
-            Rgb::BLACK
-        );
-        assert_eq!(
-            Flat.radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
-            Rgb::new(0.5, 0.25, 1.0)
-        );
-        assert_eq!(
-            Normals
-                .radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
-            Rgb::new(0.0, 0.5, 0.5)
-        );
-        assert_eq!(
-            Normals
-                .radiance(&s, &miss, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
-            Rgb::BLACK
-        );
-        assert_eq!(
-            Depth
-                .radiance(&s, &hit, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
-            Rgb::splat(2.0)
-        );
-        assert_eq!(
-            Depth
-                .radiance(&s, &miss, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
-            Rgb::BLACK
-        );
+        assert_eq!(OnOff.colour(&s, &hit, &mut st), Rgb::WHITE);
+        assert_eq!(OnOff.colour(&s, &miss, &mut st), Rgb::BLACK);
+        assert_eq!(Flat.colour(&s, &hit, &mut st), Rgb::new(0.5, 0.25, 1.0));
+        assert_eq!(Normals.colour(&s, &hit, &mut st), Rgb::new(0.0, 0.5, 0.5));
+        assert_eq!(Normals.colour(&s, &miss, &mut st), Rgb::BLACK);
+        assert_eq!(Depth.colour(&s, &hit, &mut st), Rgb::splat(2.0));
+        assert_eq!(Depth.colour(&s, &miss, &mut st), Rgb::BLACK);
         // From inside the sphere the normal still faces the ray.
         let inside = Ray::new(Point3::new(3.0, 0.0, 0.0), Vec3::Z);
         assert_eq!(
-            Normals
-                .radiance(&s, &inside, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
+            Normals.colour(&s, &inside, &mut st),
             Rgb::new(0.5, 0.5, 0.0)
         );
     }

@@ -164,10 +164,7 @@ mod tests {
         let scene = b.build(AccelKind::Bvh);
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
-        let mut sm = Sampler::new(0, 0);
-        let l = Local { shadows: true }
-            .radiance(&scene, &ray, &mut Wavelengths::Rgb, &mut sm, &mut st)
-            .to_rgb();
+        let l = crate::integrator::rgb_radiance(&Local { shadows: true }, &scene, &ray, &mut st);
         let expected = Rgb::new(
             std::f32::consts::FRAC_1_PI * std::f32::consts::FRAC_1_SQRT_2,
             0.0,
@@ -206,15 +203,10 @@ mod tests {
             Point3::new(-1.0, 0.0, 0.0) - Point3::new(-1.5, 0.0, 5.0),
         );
         let mut st = RayStats::default();
-        let mut sm = Sampler::new(0, 0);
-        let lit = Local { shadows: false }
-            .radiance(&scene, &ray, &mut Wavelengths::Rgb, &mut sm, &mut st)
-            .to_rgb();
+        let lit = crate::integrator::rgb_radiance(&Local { shadows: false }, &scene, &ray, &mut st);
         assert!((lit.r - std::f32::consts::FRAC_1_PI).abs() < 1e-5);
         assert_eq!(
-            Local { shadows: true }
-                .radiance(&scene, &ray, &mut Wavelengths::Rgb, &mut sm, &mut st)
-                .to_rgb(),
+            crate::integrator::rgb_radiance(&Local { shadows: true }, &scene, &ray, &mut st),
             Rgb::BLACK
         );
     }

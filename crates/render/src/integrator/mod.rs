@@ -76,6 +76,36 @@ pub struct SampleBatch<'a> {
     pub cursors: &'a mut [SampleCursor],
 }
 
+/// The RGB radiance `integrator` gives along `ray` (unit tests of single rays).
+#[cfg(test)]
+pub(crate) fn rgb_radiance(
+    integrator: &dyn Integrator,
+    scene: &Scene,
+    ray: &Ray,
+    stats: &mut RayStats,
+) -> crate::color::Rgb {
+    integrator
+        .radiance(
+            scene,
+            ray,
+            &mut Wavelengths::Rgb,
+            &mut Sampler::new(0, 0),
+            stats,
+        )
+        .to_rgb()
+}
+
+/// What a recursive integrator's calls share (Whitted's tree, the course's branching tracer):
+/// the scene, the sample's wavelengths (a dispersive interface anywhere in the tree keeps only
+/// the hero), the budget of rays left, the sampler and the counters.
+pub(crate) struct Recursion<'a> {
+    pub(crate) scene: &'a Scene,
+    pub(crate) lambda: &'a mut Wavelengths,
+    pub(crate) budget: u32,
+    pub(crate) sampler: &'a mut Sampler,
+    pub(crate) stats: &'a mut RayStats,
+}
+
 /// Settings that integrators read (each ignores what it does not use).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct IntegratorSettings {

@@ -11,7 +11,7 @@ pub const MAX_WHITTED_DEPTH: u32 = 100;
 pub const WHITTED_RAY_BUDGET: u32 = 4096;
 
 use super::local::shade;
-use super::Integrator;
+use super::{Integrator, Recursion};
 use crate::material::fresnel::{fresnel_dielectric, reflect, refract};
 use crate::math::Ray;
 use crate::sampling::Sampler;
@@ -35,11 +35,10 @@ impl Integrator for Whitted {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum {
-        let mut budget = WHITTED_RAY_BUDGET;
-        let mut t = Tracer {
+        let mut t = Recursion {
             scene,
             lambda,
-            budget: &mut budget,
+            budget: WHITTED_RAY_BUDGET,
             sampler,
             stats,
         };
@@ -47,28 +46,18 @@ impl Integrator for Whitted {
     }
 }
 
-/// What the recursion shares: the scene, the path's wavelengths (a dispersive interface anywhere
-/// in the tree keeps only the hero), the ray budget, the sampler and the counters.
-struct Tracer<'a> {
-    scene: &'a Scene,
-    lambda: &'a mut Wavelengths,
-    budget: &'a mut u32,
-    sampler: &'a mut Sampler,
-    stats: &'a mut RayStats,
-}
-
 impl Whitted {
-    fn trace(&self, t: &mut Tracer, ray: &Ray, depth: u32) -> SampledSpectrum {
+    fn trace(&self, t: &mut Recursion, ray: &Ray, depth: u32) -> SampledSpectrum {
         let scene = t.scene;
         let Some(si) = scene.interact(ray, t.stats) else {
             return scene.escaped(ray.d.normalize(), t.lambda);
         };
         let mut l = shade(scene, &si, true, t.lambda, t.sampler, t.stats);
-        if depth >= self.max_depth.min(MAX_WHITTED_DEPTH) || *t.budget < 2 {
+        if depth >= self.max_depth.min(MAX_WHITTED_DEPTH) || t.budget < 2 {
             return l;
         }
         // Both children are paid for up front, so that a refraction is never cut alone.
-        *t.budget -= 2;
+        t.budget -= 2;
         let w = scene
             .material(&si)
             .whitted(si.uv, si.ns.dot_vec(si.wo), t.lambda);
@@ -138,26 +127,10 @@ mod tests {
         let w = Whitted { max_depth: 10 };
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
-        let l = w
-            .radiance(
-                &scene,
-                &ray,
-                &mut Wavelengths::Rgb,
-                &mut Sampler::new(0, 0),
-                &mut st,
-            )
-            .to_rgb();
+        let l = crate::integrator::rgb_radiance(&w, &scene, &ray, &mut st);
         assert!(l.approx_eq(Rgb::splat(0.5), 1e-6), "{l:?}");
         assert_eq!(
-            Whitted { max_depth: 0 }
-                .radiance(
-                    &scene,
-                    &ray,
-                    &mut Wavelengths::Rgb,
-                    &mut Sampler::new(0, 0),
-                    &mut st
-                )
-                .to_rgb(),
+            crate::integrator::rgb_radiance(&Whitted { max_depth: 0 }, &scene, &ray, &mut st),
             Rgb::BLACK
         );
     }
@@ -198,26 +171,10 @@ mod tests {
         let ray = Ray::new(Point3::new(-5.0, 0.0, 0.0), Vec3::X);
         let mut st = RayStats::default();
         // Depth 2: in and out, no internal bounces followed beyond the limit.
-        let l = Whitted { max_depth: 2 }
-            .radiance(
-                &scene,
-                &ray,
-                &mut Wavelengths::Rgb,
-                &mut Sampler::new(0, 0),
-                &mut st,
-            )
-            .to_rgb();
+        let l = crate::integrator::rgb_radiance(&Whitted { max_depth: 2 }, &scene, &ray, &mut st);
         assert!((l.r - 0.96 * 0.96).abs() < 1e-4, "{l:?}");
         // With many bounces the internal reflections add Σ (1−F)² F^(2k).
-        let l = Whitted { max_depth: 30 }
-            .radiance(
-                &scene,
-                &ray,
-                &mut Wavelengths::Rgb,
-                &mut Sampler::new(0, 0),
-                &mut st,
-            )
-            .to_rgb();
+        let l = crate::integrator::rgb_radiance(&Whitted { max_depth: 30 }, &scene, &ray, &mut st);
         let expected = 0.96f32 * 0.96 / (1.0 - 0.04 * 0.04);
         assert!((l.r - expected).abs() < 1e-4, "{l:?} vs {expected}");
     }

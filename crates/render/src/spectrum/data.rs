@@ -11,7 +11,7 @@
 //! `spectrum_list_to_srgb` integrates the piecewise-linear spectrum (0 outside its samples)
 //! times the CIE 1931 CMFs — times the Y-normalised D65 when `d65` — normalised by ∫ȳ, converts
 //! XYZ to linear sRGB, and clamps to [0, 1] when `bounded`, else to ≥ 0. A uniform spectrum
-//! stays a plain number, except on an emitter, where it becomes `value · xyz_to_srgb(1, 1, 1)`
+//! stays a plain number, except on an emitter, where it becomes `value` times Mitsuba's colour of illuminant E
 //! (the colour of the equal-energy spectrum, as Mitsuba's spectral variants render it). The
 //! blackbody is not available in Mitsuba's RGB variants at all.
 //!
@@ -41,7 +41,7 @@ pub enum RgbRole {
     /// d65 = true`.
     Unbounded,
     /// Emitted radiance: the spectrum's own colour, clamped to ≥ 0; a constant `c` gives
-    /// `c · xyz_to_linear_srgb(1, 1, 1)`. Mitsuba: `bounded = false, d65 = false`.
+    /// `c` times Mitsuba's colour of illuminant E. Mitsuba: `bounded = false, d65 = false`.
     Emission,
     /// A measured optical constant (named conductors' η, k from Mitsuba's `data/ior`): the
     /// spectrum's own colour, clamped to ≥ 0; a constant stays itself. Mitsuba's
@@ -147,9 +147,7 @@ impl Spectrum {
                 if role != RgbRole::Emission {
                     return Rgb::splat(*c);
                 }
-                let w = xyz_to_linear_srgb_f64([1.0; 3]);
-                let c = *c as f64;
-                return clamp(role, [c * w[0], c * w[1], c * w[2]]);
+                return clamp(role, FLAT_EMISSION_RGB.map(|w| *c as f64 * w));
             }
             Self::Tabulated(_) | Self::Blackbody { .. } => {}
         }
@@ -174,6 +172,11 @@ impl Spectrum {
         }
     }
 }
+
+/// The linear sRGB colour Mitsuba 3.9.1's RGB variants give an emitted flat (equal-energy)
+/// spectrum of value 1 (illuminant E, not white: white is D65), as they compute it with their
+/// own colour-matching tables; candela's integration of the same spectrum differs by ~3e-4.
+const FLAT_EMISSION_RGB: [f64; 3] = [1.20479, 0.948291, 0.908916];
 
 fn clamp(role: RgbRole, c: [f64; 3]) -> Rgb {
     let c = c.map(|v| {

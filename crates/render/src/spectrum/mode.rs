@@ -17,7 +17,7 @@
 //! triple; the film reads lanes 0–2. In spectral mode the film turns the path's radiance into
 //! linear sRGB through the CIE 1931 observer ([`Wavelengths::to_rgb`]).
 
-use super::cie::{d65_normalized4, to_xyz, xyz_to_linear_srgb};
+use super::cie::{to_xyz, xyz_to_linear_srgb};
 use super::data::{RgbRole, Spectrum};
 use super::rgb_sigmoid::RgbSigmoid;
 use super::rgb_spectra::{RgbAlbedoSpectrum, RgbIlluminantSpectrum, RgbUnboundedSpectrum};
@@ -42,18 +42,6 @@ impl Wavelengths {
         Self::Sampled(SampledWavelengths::sample_visible(u))
     }
 
-    /// True in spectral mode.
-    #[inline]
-    pub fn is_spectral(&self) -> bool {
-        matches!(self, Self::Sampled(_))
-    }
-
-    /// The RGB triple in lanes (RGB mode's layout, whatever the mode).
-    #[inline]
-    pub fn rgb_lanes(c: Rgb) -> SampledSpectrum {
-        SampledSpectrum::from_rgb(c)
-    }
-
     /// The colour `c` in the role `role` (see the module documentation): upsampled at the
     /// sampled wavelengths in spectral mode, as is in RGB mode. A reflectance with a channel
     /// above 1 is upsampled as an unbounded value.
@@ -65,12 +53,6 @@ impl Wavelengths {
             Self::Rgb => SampledSpectrum::from_rgb(c),
             Self::Sampled(w) => upsample_fast(c, role, w),
         }
-    }
-
-    /// A reflectance (bounded colour) as lanes.
-    #[inline]
-    pub fn reflectance(&self, c: Rgb) -> SampledSpectrum {
-        self.colour(c, RgbRole::Reflectance)
     }
 
     /// An emitted radiance (or intensity, irradiance) as lanes.
@@ -117,36 +99,29 @@ impl Wavelengths {
     }
 }
 
-/// [`upsample`] at four wavelengths by the coefficient table alone (no refinement).
+/// [`upsample`] at four wavelengths, the coefficients from the table alone (no refinement).
 #[inline(never)]
 fn upsample_fast(c: Rgb, role: RgbRole, w: &SampledWavelengths) -> SampledSpectrum {
-    let c = c.map(|v| if v > 0.0 && v.is_finite() { v } else { 0.0 });
-    let m = c.max_component();
-    if role == RgbRole::Reflectance && m <= 1.0 {
-        return RgbSigmoid::from_rgb_table(c).eval4(w);
-    }
-    if !(m > 0.0) {
-        return SampledSpectrum::ZERO;
-    }
-    let scale = 2.0 * m;
-    let s = RgbSigmoid::from_rgb_table(c * (1.0 / scale)).eval4(w) * scale;
-    if role == RgbRole::Emission {
-        s * d65_normalized4(w)
-    } else {
-        s
-    }
+    upsample_with(c, role, RgbSigmoid::from_rgb_table).eval4(w)
 }
 
 /// The spectrum a colour stands for in `role` (accurate upsampling, ~10 µs: for scene
 /// constants).
 #[inline]
 pub fn upsample(c: Rgb, role: RgbRole) -> Spectrum {
+    upsample_with(c, role, RgbSigmoid::from_rgb)
+}
+
+/// The spectrum of colour `c` in `role`, its sigmoid fitted by `fit`: a reflectance in
+/// [0, 1]³ as is, an emitter × D65, anything else scaled.
+#[inline]
+fn upsample_with(c: Rgb, role: RgbRole, fit: fn(Rgb) -> RgbSigmoid) -> Spectrum {
     match role {
         RgbRole::Reflectance if c.max_component() <= 1.0 => {
-            Spectrum::RgbAlbedo(RgbAlbedoSpectrum::new(c))
+            Spectrum::RgbAlbedo(RgbAlbedoSpectrum::with_fit(c, fit))
         }
-        RgbRole::Emission => Spectrum::RgbIlluminant(RgbIlluminantSpectrum::new(c)),
-        _ => Spectrum::RgbUnbounded(RgbUnboundedSpectrum::new(c)),
+        RgbRole::Emission => Spectrum::RgbIlluminant(RgbIlluminantSpectrum::with_fit(c, fit)),
+        _ => Spectrum::RgbUnbounded(RgbUnboundedSpectrum::with_fit(c, fit)),
     }
 }
 
@@ -157,7 +132,7 @@ mod tests {
     #[test]
     fn rgb_mode_keeps_colours() {
         let c = Rgb::new(0.2, 0.5, 0.9);
-        let l = Wavelengths::Rgb.reflectance(c);
+        let l = Wavelengths::Rgb.colour(c, RgbRole::Reflectance);
         assert_eq!(l.lanes(), [0.2, 0.5, 0.9, 0.5]);
         assert_eq!(Wavelengths::Rgb.to_rgb(l), c);
         assert_eq!(Wavelengths::Rgb.illuminant(c).to_rgb(), c);
@@ -176,7 +151,7 @@ mod tests {
         };
         let c = Rgb::new(0.2, 0.5, 0.9);
         assert!(close(
-            w.reflectance(c),
+            w.colour(c, RgbRole::Reflectance),
             RgbAlbedoSpectrum::new(c).eval4(&s),
             1.0
         ));
@@ -187,7 +162,7 @@ mod tests {
         ));
         let big = Rgb::new(2.0, 1.0, 0.5);
         assert!(close(
-            w.reflectance(big),
+            w.colour(big, RgbRole::Reflectance),
             RgbUnboundedSpectrum::new(big).eval4(&s),
             4.0
         ));

@@ -42,10 +42,16 @@ pub struct RgbAlbedoSpectrum {
 impl RgbAlbedoSpectrum {
     /// The reflectance of colour `rgb` (clamped to [0, 1]³).
     pub fn new(rgb: Rgb) -> Self {
+        Self::with_fit(rgb, RgbSigmoid::from_rgb)
+    }
+
+    /// [`new`](Self::new) with the sigmoid coefficients fitted by `fit` (accurate, or the
+    /// table alone: [`RgbSigmoid::from_rgb_table`]).
+    pub fn with_fit(rgb: Rgb, fit: fn(Rgb) -> RgbSigmoid) -> Self {
         let rgb = rgb.map(|v| if v > 0.0 { v.min(1.0) } else { 0.0 });
         Self {
             rgb,
-            sigmoid: RgbSigmoid::from_rgb(rgb),
+            sigmoid: fit(rgb),
         }
     }
 
@@ -64,14 +70,14 @@ impl RgbAlbedoSpectrum {
 
 /// The colour with negative, NaN and infinite channels set to 0; `scale` = 2·max of it; the
 /// sigmoid of `rgb / scale` (scale 0 for black).
-fn scaled(rgb: Rgb) -> (Rgb, f32, RgbSigmoid) {
+fn scaled(rgb: Rgb, fit: fn(Rgb) -> RgbSigmoid) -> (Rgb, f32, RgbSigmoid) {
     let rgb = rgb.map(|v| if v > 0.0 && v.is_finite() { v } else { 0.0 });
     let m = rgb.max_component();
     if !(m > 0.0) {
         return (rgb, 0.0, RgbSigmoid::constant(0.0));
     }
     let scale = 2.0 * m;
-    (rgb, scale, RgbSigmoid::from_rgb(rgb * (1.0 / scale)))
+    (rgb, scale, fit(rgb * (1.0 / scale)))
 }
 
 /// A non-negative spectrum from any non-negative RGB: `scale · S(λ)`, scale = 2·max(rgb)
@@ -89,7 +95,13 @@ pub struct RgbUnboundedSpectrum {
 impl RgbUnboundedSpectrum {
     /// The spectrum of colour `rgb`.
     pub fn new(rgb: Rgb) -> Self {
-        let (rgb, scale, sigmoid) = scaled(rgb);
+        Self::with_fit(rgb, RgbSigmoid::from_rgb)
+    }
+
+    /// [`new`](Self::new) with the sigmoid coefficients fitted by `fit` (accurate, or the
+    /// table alone: [`RgbSigmoid::from_rgb_table`]).
+    pub fn with_fit(rgb: Rgb, fit: fn(Rgb) -> RgbSigmoid) -> Self {
+        let (rgb, scale, sigmoid) = scaled(rgb, fit);
         Self {
             rgb,
             scale,
@@ -125,7 +137,13 @@ pub struct RgbIlluminantSpectrum {
 impl RgbIlluminantSpectrum {
     /// The emission of RGB radiance `rgb` (negative channels count as 0).
     pub fn new(rgb: Rgb) -> Self {
-        let (rgb, scale, sigmoid) = scaled(rgb);
+        Self::with_fit(rgb, RgbSigmoid::from_rgb)
+    }
+
+    /// [`new`](Self::new) with the sigmoid coefficients fitted by `fit` (accurate, or the
+    /// table alone: [`RgbSigmoid::from_rgb_table`]).
+    pub fn with_fit(rgb: Rgb, fit: fn(Rgb) -> RgbSigmoid) -> Self {
+        let (rgb, scale, sigmoid) = scaled(rgb, fit);
         Self {
             rgb,
             scale,

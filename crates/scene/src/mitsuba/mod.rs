@@ -256,10 +256,6 @@ fn collect_ids<'t>(
     Ok(())
 }
 
-/// The linear sRGB colour of a flat (equal-energy) spectrum of value 1, as Mitsuba's RGB
-/// variants convert emitted spectra (it is not white: white is D65).
-const FLAT_SPECTRUM: Rgb = Rgb::new(1.20479, 0.948291, 0.908916);
-
 /// The importer's state while it walks the scene.
 struct Loader<'t> {
     src: SourceFile,
@@ -399,11 +395,6 @@ impl<'t> Loader<'t> {
         let spectrum = |s: Spectrum| match s {
             // A flat reflectance is its grey in both modes (its upsampled spectrum is flat).
             Spectrum::Constant(c) if role != RgbRole::Emission => Ok((Rgb::splat(c), None)),
-            // A flat emitted spectrum: Mitsuba's RGB variants give it the colour of
-            // illuminant E (their own quadrature's value, kept exactly).
-            Spectrum::Constant(c) if role == RgbRole::Emission => {
-                Ok((FLAT_SPECTRUM * c, Some(Arc::new(s))))
-            }
             s => Ok((s.to_rgb(role), Some(Arc::new(s)))),
         };
         match i.value {
