@@ -287,11 +287,14 @@ impl Sampler {
         let n = (self.end.saturating_sub(self.chunk) as usize).clamp(j + 1, CHUNK);
         self.batched |= 1 << d;
         self.batch_from[d] = j as u8;
-        crate::simd::run(Batch {
-            out: &mut self.batch[d][j..n],
-            first: self.chunk + j as u32,
-            seeds: s,
-        });
+        crate::simd::run_auto_at(
+            crate::simd::SimdLevel::detected(),
+            Batch {
+                out: &mut self.batch[d][j..n],
+                first: self.chunk + j as u32,
+                seeds: s,
+            },
+        );
     }
 
     /// The tabulated pair of the current dimension of a Sobol sampler, when the chunk's table
@@ -391,6 +394,18 @@ impl Sampler {
                 [a, b]
             }
         }
+    }
+
+    /// The pair of the current dimension computed directly, without the chunk's tables (tests).
+    #[cfg(test)]
+    fn next_2d_general_direct(&mut self, seed: u32) -> [f32; 2] {
+        let s = DimSeeds::new(seed, self.dim);
+        self.dim += 2;
+        let r = laine_karras(self.rindex, s.shuffle);
+        let rr = r.reverse_bits();
+        let x = laine_karras(rr, s.x).reverse_bits();
+        let y = laine_karras(reversed_sobol_dim1(rr), s.y).reverse_bits();
+        [to_unit(x), to_unit(y)]
     }
 
     /// A uniform integer in `[0, n)` (`n` > 0).
@@ -653,6 +668,41 @@ mod tests {
             .sum::<f64>()
             / 1024.0;
         assert!((mean - 0.5).abs() < 0.01);
+    }
+
+    /// The tabulating kernel gives the scalar computation's bits at every instruction-set
+    /// level (AVX-512 with GFNI, AVX2, SSE; a level the CPU lacks runs the next one down).
+    #[test]
+    fn the_tabulating_kernel_gives_the_same_bits_at_every_level() {
+        use crate::simd::SimdLevel;
+        let mut s = Sampler::for_pixel(3, 77, 64);
+        let Mode::Sobol(seed) = s.mode else {
+            panic!("sobol")
+        };
+        for dim in [0u32, 2, 9, 31] {
+            let seeds = DimSeeds::new(seed, dim);
+            let first = 0x1234_5640;
+            let mut want = [[0f32; 2]; CHUNK];
+            for (k, p) in want.iter_mut().enumerate() {
+                s.start_sample(first + k as u32);
+                s.dim = dim;
+                *p = s.next_2d_general_direct(seed);
+            }
+            for level in [SimdLevel::Sse, SimdLevel::Avx2, SimdLevel::Avx512] {
+                for len in [1, 7, 16, 17, CHUNK] {
+                    let mut out = [[0f32; 2]; CHUNK];
+                    crate::simd::run_auto_at(
+                        level,
+                        Batch {
+                            out: &mut out[..len],
+                            first,
+                            seeds,
+                        },
+                    );
+                    assert_eq!(out[..len], want[..len], "{level:?} dim {dim} len {len}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -9,6 +9,9 @@
 //! CPU that has them: the same SSE operations in VEX form (three operands, fewer moves) and
 //! cheaper bit scans. No arithmetic changes: floating-point contraction stays off.
 //!
+//! [`run_auto_at`] executes a kernel the compiler vectorises by itself (integer loops: the
+//! sampler's scrambles) compiled for AVX-512 with GFNI where the CPU has them, else as [`run`].
+//!
 //! [`run_wide`] executes a kernel over sixteen lanes ([`Wide`]) with the widest registers the
 //! CPU has: one AVX-512 register, two AVX registers or four SSE ones. Every width gives the
 //! same bits. The environment variable `CANDELA_SIMD` (`sse`, `avx2`, `avx512`) caps the
@@ -17,9 +20,10 @@
 //! This module sits below everything that uses vectors (the samplers, the accelerators).
 
 // Why unsafe code is allowed in this file:
-// - `run` calls its AVX2 version (a `#[target_feature]` function, unsafe to call from code not
-//   compiled for the feature) only after `is_x86_feature_detected!` confirmed every feature
-//   that version is compiled with;
+// - `run`, `run_auto_at` and `run_wide_at` call their AVX2 / AVX-512 versions
+//   (`#[target_feature]` functions, unsafe to call from code not compiled for the feature)
+//   only after `is_x86_feature_detected!` confirmed every feature that version is compiled
+//   with;
 // - `prefetch` issues `_mm_prefetch`, an SSE instruction (always present on x86-64) that never
 //   faults.
 #![allow(unsafe_code)]
@@ -85,6 +89,56 @@ pub(crate) fn run<K: Kernel>(k: K) -> K::Output {
         return unsafe { run_avx2(k) };
     }
     k.run(Sse)
+}
+
+/// Runs `k`, a kernel the compiler vectorises by itself (integer loops such as the sampler's
+/// scrambles), compiled for AVX-512 with GFNI when the CPU has them and `level` allows it
+/// (sixteen lanes per instruction; bit reversal in two instructions), otherwise as [`run`]
+/// does. Integer arithmetic is exact, so every version gives the same bits.
+#[inline(always)]
+pub(crate) fn run_auto_at<K: Kernel>(level: SimdLevel, k: K) -> K::Output {
+    #[cfg(target_arch = "x86_64")]
+    if level >= SimdLevel::Avx512 && has_avx512_gfni() {
+        // SAFETY: the CPU supports every feature `run_avx512_gfni` is compiled with.
+        return unsafe { run_avx512_gfni(k) };
+    }
+    #[cfg(target_arch = "x86_64")]
+    if level >= SimdLevel::Avx2 && has_avx2() {
+        // SAFETY: the CPU supports every feature `run_avx2` is compiled with.
+        return unsafe { run_avx2(k) };
+    }
+    let _ = level;
+    k.run(Sse)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx512vl,avx512dq,gfni,avx2,bmi1,bmi2,lzcnt,popcnt")]
+fn run_avx512_gfni<K: Kernel>(k: K) -> K::Output {
+    // SAFETY: this function is only called on a CPU with AVX-512 and GFNI (see
+    // `run_auto_at`), which includes AVX2.
+    k.run(unsafe { Avx2::new() })
+}
+
+/// True when the CPU has every feature `run_avx512_gfni` is compiled for and `CANDELA_SIMD`
+/// does not cap the level below AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn has_avx512_gfni() -> bool {
+    use std::sync::atomic::{AtomicU8, Ordering};
+    static CACHE: AtomicU8 = AtomicU8::new(0);
+    match CACHE.load(Ordering::Relaxed) {
+        1 => false,
+        2 => true,
+        _ => {
+            let yes = SimdLevel::detected() == SimdLevel::Avx512
+                && std::arch::is_x86_feature_detected!("avx512bw")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+                && std::arch::is_x86_feature_detected!("avx512dq")
+                && std::arch::is_x86_feature_detected!("gfni");
+            CACHE.store(1 + yes as u8, Ordering::Relaxed);
+            yes
+        }
+    }
 }
 
 /// Asks for the cache lines of `x` (up to 256 bytes) to be loaded: a hint, no effect on
