@@ -115,13 +115,18 @@ pub struct RoughCoating {
 impl RoughCoating {
     /// Tabulates the coating (numerical integration over its microfacet normals).
     pub fn new(mf: Microfacet, eta: f32) -> Self {
+        use rayon::prelude::*;
         let mu = |i: usize| (i as f32 / (TABLE - 1) as f32).max(1e-6);
+        // The entries in parallel (scene loading is on the clock), summed in order.
         let transmittance = (0..TABLE)
+            .into_par_iter()
             .map(|i| coating_transmittance(&mf, eta, mu(i)))
             .collect();
-        let internal = (0..TABLE)
+        let albedo: Vec<f32> = (0..TABLE)
+            .into_par_iter()
             .map(|i| specular_albedo(&mf, 1.0 / eta, mu(i)) * mu(i))
-            .sum::<f32>()
+            .collect();
+        let internal = albedo.iter().sum::<f32>()
             / TABLE as f32
             * 2.0;
         Self {
