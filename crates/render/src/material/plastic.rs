@@ -126,9 +126,7 @@ impl RoughCoating {
             .into_par_iter()
             .map(|i| specular_albedo(&mf, 1.0 / eta, mu(i)) * mu(i))
             .collect();
-        let internal = albedo.iter().sum::<f32>()
-            / TABLE as f32
-            * 2.0;
+        let internal = albedo.iter().sum::<f32>() / TABLE as f32 * 2.0;
         Self {
             mf,
             eta,

@@ -10,6 +10,7 @@
 //! lane.
 
 use super::layout::{Kind, Ref, COUNT_MASK, KIND_SHIFT};
+use super::packet::Coherence;
 use super::Bvh;
 use crate::geometry::{Geometry, PrimRef as GeomPrim};
 use crate::interaction::Hit;
@@ -128,6 +129,9 @@ impl Bvh {
     ) {
         *hits = [None; BATCH];
         if self.flat_prims.is_empty() && self.flat_rest.is_empty() {
+            if let Some(c) = self.packet_for(level, rays) {
+                return self.intersect_packet(level, geometry, rays, c, hits, stats);
+            }
             for i in rays.lanes() {
                 hits[i] = self.intersect(geometry, &rays.ray(i), stats);
             }
@@ -178,6 +182,9 @@ impl Bvh {
         stats: &mut RayStats,
     ) -> u32 {
         if self.flat_prims.is_empty() && self.flat_rest.is_empty() {
+            if let Some(c) = self.packet_for(level, rays) {
+                return self.occluded_packet(level, geometry, rays, c, stats);
+            }
             let mut hit = 0;
             for i in rays.lanes() {
                 if self.occluded(geometry, &rays.ray(i), stats) {
@@ -213,6 +220,21 @@ impl Bvh {
         hit
     }
 }
+
+impl Bvh {
+    /// Whether a deep tree traces `rays` as one packet ([`super::packet`]): on sixteen-lane
+    /// registers, when the rays are coherent.
+    #[inline]
+    fn packet_for(&self, level: SimdLevel, rays: &RayBatch) -> Option<Coherence> {
+        if self.root.meta != 0 || level.min(SimdLevel::supported()) < PACKET_LEVEL {
+            return None;
+        }
+        Coherence::of(rays)
+    }
+}
+
+/// The narrowest registers packets are taken on (see [`super::packet`]).
+const PACKET_LEVEL: SimdLevel = SimdLevel::Avx512;
 
 /// A batch loaded into registers.
 struct Lanes<W: Wide> {

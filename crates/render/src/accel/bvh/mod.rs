@@ -35,10 +35,14 @@
 //! closest hit so far, so hits at equal `t` are still tested and go to the smaller id, exactly
 //! as in the list. The sheared ray of the triangle test and the reciprocal direction are
 //! computed once per ray (and not at all for scenes without triangles).
+//!
+//! Batches of coherent rays (a pixel's camera rays) go down the tree together as one packet
+//! ([`packet`]), with the same hits as ray by ray.
 
 mod batch;
 mod build;
 mod layout;
+mod packet;
 mod traverse;
 
 pub use batch::BatchHits;

@@ -16,7 +16,7 @@ use crate::simd::{Isa, F4};
 use crate::stats::RayStats;
 
 /// The far distance of a box grows by 2γ₃ (pbrt) to cover round-off.
-const FAR_SCALE: f32 = 1.0 + 2.0 * GAMMA3;
+pub(super) const FAR_SCALE: f32 = 1.0 + 2.0 * GAMMA3;
 
 impl Bvh {
     /// The closest hit.

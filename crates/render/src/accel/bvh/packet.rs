@@ -1,0 +1,600 @@
+//! Coherent batches of rays through a deep BVH together (packet traversal).
+//!
+//! The samples of one pixel are traced side by side ([`RayBatch`]); their camera rays, and
+//! often their shadow rays towards a small light, start close together and point the same way,
+//! so they cross the same nodes. When every active ray of a batch has the same direction signs
+//! and the same axes for the watertight triangle test ([`Coherence`]), the batch goes down the
+//! tree as one packet: each child box of a node is tested against all the rays at once, sixteen
+//! lanes wide ([`crate::simd::Wide`]), a child is visited by the rays that hit its box (a lane
+//! mask), nearest child first (by its first ray's entry distance), and each triangle of a leaf
+//! is tested against all those rays at once. Other batches go ray by ray.
+//!
+//! Results are the single-ray traversal's, bit for bit: the box test is the same arithmetic
+//! per lane (a packet may visit more nodes than a ray alone, never fewer: boxes only cull), the
+//! triangle test is [`crate::shape::intersect_triangle`]'s arithmetic per lane (with its f64
+//! edge fallback), and the closest hit is the smallest (t, primitive id) over every triangle
+//! whose test passes, which does not depend on the order of the tests. Leaves of other
+//! primitives go through the single-ray leaf routines, lane by lane.
+//!
+//! A node costs a packet about eight single-ray node tests, so packets pay when most lanes
+//! follow the same nodes and the registers are sixteen lanes wide: [`Bvh::intersect_batch`]
+//! takes this path on AVX-512 only (the kernels run and are tested at every width).
+
+use super::batch::BatchHits;
+use super::layout::{Ref, COUNT_MASK, STACK, TRI_LEAF, W as NODE_WIDTH};
+use super::traverse::FAR_SCALE;
+use super::Bvh;
+use crate::accel::closest;
+use crate::geometry::Geometry;
+use crate::interaction::Hit;
+use crate::math::{RayBatch, BATCH};
+use crate::shape::ShearedRay;
+use crate::simd::{SimdLevel, Wide, WideKernel};
+use crate::stats::RayStats;
+
+/// The fewest active rays a packet is worth.
+const PACKET_MIN: u32 = 6;
+
+/// What the rays of a coherent batch share: the axes of the watertight triangle test
+/// ([`ShearedRay::axes`]) and, per axis, the box plane (index into a node's `b`) crossed first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Coherence {
+    k: [usize; 3],
+    near: [usize; 3],
+}
+
+impl Coherence {
+    /// What every active ray of `rays` shares, when they share it and there are enough of them.
+    pub(super) fn of(rays: &RayBatch) -> Option<Self> {
+        if rays.active.count_ones() < PACKET_MIN {
+            return None;
+        }
+        let mut common: Option<Self> = None;
+        for i in rays.lanes() {
+            let ray = rays.ray(i);
+            let d = [ray.d.x, ray.d.y, ray.d.z];
+            // The sign of the reciprocal, as the single-ray box test sees it (1/-0 = -∞ < 0,
+            // 1/NaN is not).
+            let near = [0, 1, 2].map(|a| {
+                if d[a].is_sign_negative() && !d[a].is_nan() {
+                    a + 3
+                } else {
+                    a
+                }
+            });
+            let c = Self {
+                k: ShearedRay::axes(&ray),
+                near,
+            };
+            match common {
+                None => common = Some(c),
+                Some(p) if p != c => return None,
+                Some(_) => {}
+            }
+        }
+        common
+    }
+}
+
+impl Bvh {
+    /// The closest hits of the active lanes of `rays`, which share `c`, as one packet.
+    pub(super) fn intersect_packet(
+        &self,
+        level: SimdLevel,
+        geometry: &Geometry,
+        rays: &RayBatch,
+        c: Coherence,
+        hits: &mut BatchHits,
+        stats: &mut RayStats,
+    ) {
+        crate::simd::run_wide_at(
+            level,
+            Packet {
+                bvh: self,
+                geometry,
+                rays,
+                c,
+                query: Closest { hits },
+                stats,
+            },
+        );
+    }
+
+    /// The active lanes of `rays` (which share `c`) that hit something, as one packet.
+    pub(super) fn occluded_packet(
+        &self,
+        level: SimdLevel,
+        geometry: &Geometry,
+        rays: &RayBatch,
+        c: Coherence,
+        stats: &mut RayStats,
+    ) -> u32 {
+        let mut found = 0;
+        crate::simd::run_wide_at(
+            level,
+            Packet {
+                bvh: self,
+                geometry,
+                rays,
+                c,
+                query: Any { found: &mut found },
+                stats,
+            },
+        );
+        found
+    }
+}
+
+/// What a packet looks for: the closest hit of every lane, or any hit.
+trait PacketQuery {
+    /// Whether children are visited nearest first.
+    const ORDERED: bool;
+    /// Lane `i` hit primitive `id` at `t` with barycentrics `uv` (sub-primitive `sub`); returns
+    /// the lane's new `tmax` when the hit is kept, and whether the lane is finished.
+    fn hit(&mut self, i: usize, h: Hit) -> (Option<f32>, bool);
+    /// A leaf of other primitives for lane `i` along `ray`; returns what [`Self::hit`] does.
+    fn other_leaf(
+        &mut self,
+        bvh: &Bvh,
+        geometry: &Geometry,
+        r: Ref,
+        i: usize,
+        ray: &crate::math::Ray,
+        stats: &mut RayStats,
+    ) -> (Option<f32>, bool);
+}
+
+struct Closest<'a> {
+    hits: &'a mut BatchHits,
+}
+
+impl PacketQuery for Closest<'_> {
+    const ORDERED: bool = true;
+
+    #[inline(always)]
+    fn hit(&mut self, i: usize, h: Hit) -> (Option<f32>, bool) {
+        let better = match &self.hits[i] {
+            None => true,
+            Some(b) => h.t < b.t || (h.t == b.t && h.prim < b.prim),
+        };
+        if better {
+            self.hits[i] = Some(h);
+            (Some(h.t.next_up()), false)
+        } else {
+            (None, false)
+        }
+    }
+
+    fn other_leaf(
+        &mut self,
+        bvh: &Bvh,
+        geometry: &Geometry,
+        r: Ref,
+        i: usize,
+        ray: &crate::math::Ray,
+        stats: &mut RayStats,
+    ) -> (Option<f32>, bool) {
+        match bvh.leaf_closest(geometry, r, ray, stats) {
+            Some(h) if closest(&mut self.hits[i], h) => (Some(h.t.next_up()), false),
+            _ => (None, false),
+        }
+    }
+}
+
+struct Any<'a> {
+    found: &'a mut u32,
+}
+
+impl PacketQuery for Any<'_> {
+    const ORDERED: bool = false;
+
+    #[inline(always)]
+    fn hit(&mut self, i: usize, _: Hit) -> (Option<f32>, bool) {
+        *self.found |= 1 << i;
+        (None, true)
+    }
+
+    fn other_leaf(
+        &mut self,
+        bvh: &Bvh,
+        geometry: &Geometry,
+        r: Ref,
+        i: usize,
+        ray: &crate::math::Ray,
+        stats: &mut RayStats,
+    ) -> (Option<f32>, bool) {
+        if bvh.leaf_any(geometry, r, ray, stats) {
+            *self.found |= 1 << i;
+            (None, true)
+        } else {
+            (None, false)
+        }
+    }
+}
+
+/// A packet traversal, as a kernel for [`crate::simd::run_wide_at`].
+struct Packet<'a, Q> {
+    bvh: &'a Bvh,
+    geometry: &'a Geometry,
+    rays: &'a RayBatch,
+    c: Coherence,
+    query: Q,
+    stats: &'a mut RayStats,
+}
+
+impl<Q: PacketQuery> WideKernel for Packet<'_, Q> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<W: Wide>(mut self, w: W) {
+        let bvh = self.bvh;
+        let r = self.rays;
+        let o = [w.load(&r.o[0]), w.load(&r.o[1]), w.load(&r.o[2])];
+        let d = [w.load(&r.d[0]), w.load(&r.d[1]), w.load(&r.d[2])];
+        let one = w.splat(1.0);
+        let inv = [w.div(one, d[0]), w.div(one, d[1]), w.div(one, d[2])];
+        let near = self.c.near;
+        let far = near.map(|p| (p + 3) % 6);
+        let [kx, ky, kz] = self.c.k;
+        // The sheared ray of the watertight test: the same quotients as `TriRay::new`.
+        let sx = w.div(d[kx], d[kz]);
+        let sy = w.div(d[ky], d[kz]);
+        let sz = w.div(one, d[kz]);
+        let (ox, oy, oz) = (o[kx], o[ky], o[kz]);
+        let tmin = w.load(&r.tmin);
+        let mut tmax_lanes = r.tmax;
+        let mut tmax = w.load(&tmax_lanes);
+        let far_scale = w.splat(FAR_SCALE);
+        let zero = w.splat(0.0);
+
+        // Lanes still looking (any-hit lanes leave when they find something).
+        let mut live = r.active;
+        let mut stack = [(Ref::EMPTY, 0u32); STACK];
+        let mut sp = 0usize;
+        let mut cur = bvh.root;
+        let mut mask = live;
+        let mut t0_lanes = [0f32; BATCH];
+        loop {
+            if cur.meta == 0 {
+                self.stats.nodes += mask.count_ones() as u64;
+                let node = &bvh.nodes[cur.child as usize];
+                let mut kids = [(Ref::EMPTY, 0u32, 0f32); NODE_WIDTH];
+                let mut n = 0;
+                for c in 0..NODE_WIDTH {
+                    if node.b[0][c] > node.b[3][c] {
+                        // An unused slot (inverted box).
+                        continue;
+                    }
+                    let mut t0 = tmin;
+                    let mut t1 = tmax;
+                    for a in 0..3 {
+                        let tn = w.mul(w.sub(w.splat(node.b[near[a]][c]), o[a]), inv[a]);
+                        let tf = w.mul(w.sub(w.splat(node.b[far[a]][c]), o[a]), inv[a]);
+                        // A NaN never narrows the interval (as `max_keep8` / `min_keep8`).
+                        t0 = w.select(w.gt(tn, t0), tn, t0);
+                        t1 = w.select(w.lt(tf, t1), tf, t1);
+                    }
+                    let m = w.bits(w.le(t0, w.mul(t1, far_scale))) & mask;
+                    if m != 0 {
+                        let dist = if Q::ORDERED {
+                            w.store(t0, &mut t0_lanes);
+                            t0_lanes[m.trailing_zeros() as usize]
+                        } else {
+                            0.0
+                        };
+                        let child = Ref {
+                            child: node.child[c],
+                            meta: node.meta[c],
+                        };
+                        // Insertion by entry distance, nearest first.
+                        let mut j = n;
+                        while Q::ORDERED && j > 0 && kids[j - 1].2 > dist {
+                            kids[j] = kids[j - 1];
+                            j -= 1;
+                        }
+                        kids[j] = (child, m, dist);
+                        n += 1;
+                    }
+                }
+                if n > 0 {
+                    // The others on the stack, farthest deepest.
+                    for k in (1..n).rev() {
+                        stack[sp] = (kids[k].0, kids[k].1);
+                        sp += 1;
+                    }
+                    (cur, mask) = (kids[0].0, kids[0].1);
+                    continue;
+                }
+            } else {
+                let n = cur.meta & COUNT_MASK;
+                let first = cur.child as usize;
+                if cur.meta & !COUNT_MASK == TRI_LEAF {
+                    self.stats.prim_tests += n as u64 * mask.count_ones() as u64;
+                    'blocks: for (k, tri) in bvh.tris[first..first + n.div_ceil(4) as usize]
+                        .iter()
+                        .enumerate()
+                    {
+                        let in_leaf = (n as usize - 4 * k).min(4);
+                        for j in 0..in_leaf {
+                            let v = &tri.v;
+                            let z = [0, 1, 2].map(|p| w.sub(w.splat(v[p][kz][j]), oz));
+                            let px = [0, 1, 2]
+                                .map(|p| w.sub(w.sub(w.splat(v[p][kx][j]), ox), w.mul(sx, z[p])));
+                            let py = [0, 1, 2]
+                                .map(|p| w.sub(w.sub(w.splat(v[p][ky][j]), oy), w.mul(sy, z[p])));
+                            let [ax, bx, cx] = px;
+                            let [ay, by, cy] = py;
+                            let mut u = w.sub(w.mul(cx, by), w.mul(cy, bx));
+                            let mut vv = w.sub(w.mul(ax, cy), w.mul(ay, cx));
+                            let mut ww = w.sub(w.mul(bx, ay), w.mul(by, ax));
+                            let on_edge = w
+                                .bits(w.or(w.or(w.eq(u, zero), w.eq(vv, zero)), w.eq(ww, zero)))
+                                & mask;
+                            if on_edge != 0 {
+                                // f32 cannot decide the sign: the edge functions in f64, for
+                                // those lanes (as the single-ray test).
+                                let f = |a: f32, b: f32, c: f32, d: f32| {
+                                    (a as f64 * b as f64 - c as f64 * d as f64) as f32
+                                };
+                                let mut lanes = [[0f32; BATCH]; 9];
+                                for (dst, src) in
+                                    lanes.iter_mut().zip([u, vv, ww, ax, ay, bx, by, cx, cy])
+                                {
+                                    w.store(src, dst);
+                                }
+                                let [mut uu, mut v2, mut w2, ax, ay, bx, by, cx, cy] = lanes;
+                                let mut e = on_edge;
+                                while e != 0 {
+                                    let i = e.trailing_zeros() as usize;
+                                    e &= e - 1;
+                                    uu[i] = f(cx[i], by[i], cy[i], bx[i]);
+                                    v2[i] = f(ax[i], cy[i], ay[i], cx[i]);
+                                    w2[i] = f(bx[i], ay[i], by[i], ax[i]);
+                                }
+                                (u, vv, ww) = (w.load(&uu), w.load(&v2), w.load(&w2));
+                            }
+                            let neg = w.or(w.or(w.lt(u, zero), w.lt(vv, zero)), w.lt(ww, zero));
+                            let pos = w.or(w.or(w.gt(u, zero), w.gt(vv, zero)), w.gt(ww, zero));
+                            let det = w.add(w.add(u, vv), ww);
+                            let inside = w.bits(w.and_not(w.ne(det, zero), w.and(neg, pos)));
+                            if inside & mask == 0 {
+                                continue;
+                            }
+                            let t_scaled = w.add(
+                                w.add(w.mul(u, w.mul(sz, z[0])), w.mul(vv, w.mul(sz, z[1]))),
+                                w.mul(ww, w.mul(sz, z[2])),
+                            );
+                            let inv_det = w.div(one, det);
+                            let t = w.mul(t_scaled, inv_det);
+                            let mut valid =
+                                inside & mask & w.bits(w.and(w.gt(t, tmin), w.lt(t, tmax)));
+                            if valid == 0 {
+                                continue;
+                            }
+                            let mut lanes = [[0f32; BATCH]; 4];
+                            for (dst, src) in lanes.iter_mut().zip([t, vv, ww, inv_det]) {
+                                w.store(src, dst);
+                            }
+                            let [tl, vl, wl, il] = lanes;
+                            let mut changed = false;
+                            while valid != 0 {
+                                let i = valid.trailing_zeros() as usize;
+                                valid &= valid - 1;
+                                let h = Hit {
+                                    t: tl[i],
+                                    prim: tri.id[j],
+                                    uv: [vl[i] * il[i], wl[i] * il[i]],
+                                    sub: 0,
+                                    leaf: 0,
+                                };
+                                let (new_tmax, done) = self.query.hit(i, h);
+                                if let Some(tm) = new_tmax {
+                                    tmax_lanes[i] = tm;
+                                    changed = true;
+                                }
+                                if done {
+                                    live &= !(1 << i);
+                                    mask &= !(1 << i);
+                                }
+                            }
+                            if changed {
+                                tmax = w.load(&tmax_lanes);
+                            }
+                            if mask == 0 {
+                                break 'blocks;
+                            }
+                        }
+                    }
+                } else {
+                    let mut m = mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let mut ray = r.ray(i);
+                        ray.tmax = tmax_lanes[i];
+                        let (new_tmax, done) =
+                            self.query
+                                .other_leaf(bvh, self.geometry, cur, i, &ray, self.stats);
+                        if let Some(tm) = new_tmax {
+                            tmax_lanes[i] = tm;
+                        }
+                        if done {
+                            live &= !(1 << i);
+                        }
+                    }
+                    tmax = w.load(&tmax_lanes);
+                }
+            }
+            // The next entry some live lane still visits.
+            loop {
+                if sp == 0 || live == 0 {
+                    return;
+                }
+                sp -= 1;
+                (cur, mask) = stack[sp];
+                mask &= live;
+                if mask != 0 {
+                    break;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::build_prims;
+    use crate::geometry::Object;
+    use crate::interaction::SurfaceProps;
+    use crate::math::{Point3, Ray, Transform, Vec3};
+    use crate::sampling::Pcg32;
+    use crate::shape::{Mesh, Shape, Sphere};
+
+    /// A deep tree: a bumpy grid of triangles on integer vertices (rays through its vertices
+    /// and edges meet the f64 fallback), a cloud of loose triangles and a few spheres (leaves of
+    /// other primitives).
+    fn geometry() -> Geometry {
+        let mut rng = Pcg32::new(9, 1);
+        let mut u = || rng.next_f32() * 2.0 - 1.0;
+        let n = 24;
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let z = if (i * 7 + j * 3) % 5 == 0 { 1.0 } else { 0.0 };
+                positions.push(Point3::new(i as f32 - 12.0, j as f32 - 12.0, z));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let a = (j * (n + 1) + i) as u32;
+                let (b, c, d) = (a + 1, a + n as u32 + 1, a + n as u32 + 2);
+                indices.push([a, b, d]);
+                indices.push([a, d, c]);
+            }
+        }
+        let grid = Mesh {
+            positions,
+            indices,
+            ..Mesh::default()
+        };
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for t in 0..600u32 {
+            let c = Vec3::new(u() * 8.0, u() * 8.0, 2.0 + u().abs() * 6.0);
+            for _ in 0..3 {
+                positions.push((c + Vec3::new(u(), u(), u()) * 0.6).to_point());
+            }
+            indices.push([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        let cloud = Mesh {
+            positions,
+            indices,
+            ..Mesh::default()
+        };
+        let objects = (0..6)
+            .map(|_| Object {
+                shape: Shape::Sphere(Sphere::new(
+                    Transform::translation(Vec3::new(u() * 6.0, u() * 6.0, 3.0 + u().abs() * 3.0))
+                        * Transform::scaling(Vec3::new(0.8, 0.8, 0.8)),
+                )),
+                props: SurfaceProps::default(),
+            })
+            .collect();
+        Geometry::new(objects, vec![grid, cloud])
+    }
+
+    /// A coherent batch: origins near `o`, directions near `d` (exactly `o` and `d` when
+    /// `exact`, so that rays through vertices stay on them), some lanes inactive or clipped.
+    fn batch(rng: &mut Pcg32, o: Point3, d: Vec3, spread: f32, k: usize) -> RayBatch {
+        let mut b = RayBatch::default();
+        for i in 0..BATCH {
+            let mut u = || (rng.next_f32() * 2.0 - 1.0) * spread;
+            let shift = Vec3::new(u(), u(), 0.0);
+            let mut ray = Ray::new(o + shift, d + Vec3::new(u(), u(), u()) * 0.1);
+            if spread == 0.0 {
+                // Integer offsets: rays straight down through grid vertices.
+                ray = Ray::new(
+                    o + Vec3::new((i % 4) as f32, (i / 4) as f32, 0.0),
+                    Vec3::new(0.0, 0.0, -1.0),
+                );
+            }
+            if (i + k) % 6 == 5 {
+                ray.tmax = 6.5;
+            }
+            if (i + k) % 7 == 3 {
+                ray.tmin = 1.5;
+            }
+            if !(i * 5 + k).is_multiple_of(13) {
+                b.set(i, &ray);
+            }
+        }
+        b
+    }
+
+    #[test]
+    fn packets_get_the_single_ray_hits_at_every_simd_level() {
+        let g = geometry();
+        let bvh = Bvh::build(&g, &build_prims(&g));
+        assert!(bvh.flat.is_empty() && bvh.root.meta == 0, "a deep tree");
+        let mut rng = Pcg32::new(3, 4);
+        let (mut packets, mut hits_seen, mut blocked_seen) = (0, 0, 0);
+        for k in 0..300 {
+            let spread = [0.0, 0.01, 0.3, 2.0][k % 4];
+            let o = Point3::new(
+                (rng.next_f32() * 16.0 - 8.0).round(),
+                (rng.next_f32() * 16.0 - 8.0).round(),
+                12.0,
+            );
+            let target = Point3::new(rng.next_f32() * 8.0 - 4.0, rng.next_f32() * 8.0 - 4.0, 0.0);
+            let rays = batch(&mut rng, o, target - o, spread, k);
+            let Some(c) = Coherence::of(&rays) else {
+                continue;
+            };
+            packets += 1;
+            for level in [SimdLevel::Sse, SimdLevel::Avx2, SimdLevel::Avx512] {
+                let mut st = RayStats::default();
+                let mut hits = [None; BATCH];
+                bvh.intersect_packet(level, &g, &rays, c, &mut hits, &mut st);
+                let blocked = bvh.occluded_packet(level, &g, &rays, c, &mut st);
+                for i in 0..BATCH {
+                    if rays.active >> i & 1 == 0 {
+                        assert!(hits[i].is_none() && blocked >> i & 1 == 0);
+                        continue;
+                    }
+                    let ray = rays.ray(i);
+                    let single = bvh.intersect(&g, &ray, &mut st);
+                    assert_eq!(hits[i], single, "{level:?}, batch {k}, lane {i}: {ray:?}");
+                    let occluded = bvh.occluded(&g, &ray, &mut st);
+                    assert_eq!(blocked >> i & 1 == 1, occluded, "{level:?} {k} {i}");
+                    hits_seen += single.is_some() as usize;
+                    blocked_seen += occluded as usize;
+                }
+            }
+        }
+        assert!(packets > 200, "only {packets} coherent batches");
+        assert!(
+            hits_seen > 5000 && blocked_seen > 5000,
+            "{hits_seen} {blocked_seen}"
+        );
+    }
+
+    #[test]
+    fn batches_of_mixed_directions_are_not_packets() {
+        let mut b = RayBatch::default();
+        for i in 0..BATCH {
+            let d = if i == 9 { -1.0 } else { 1.0 };
+            b.set(i, &Ray::new(Point3::ORIGIN, Vec3::new(0.3, d, 2.0)));
+        }
+        assert_eq!(Coherence::of(&b), None);
+        // -0 is crossed the other way round.
+        b.set(9, &Ray::new(Point3::ORIGIN, Vec3::new(0.3, 1.0, 2.0)));
+        assert!(Coherence::of(&b).is_some());
+        b.set(3, &Ray::new(Point3::ORIGIN, Vec3::new(-0.0, 1.0, 2.0)));
+        assert_eq!(Coherence::of(&b), None);
+        // Too few rays.
+        b.active = 0b11111;
+        assert_eq!(Coherence::of(&b), None);
+    }
+}
