@@ -49,30 +49,45 @@ impl Coherence {
         if rays.active.count_ones() < PACKET_MIN {
             return None;
         }
-        let mut common: Option<Self> = None;
-        for i in rays.lanes() {
-            let ray = rays.ray(i);
-            let d = [ray.d.x, ray.d.y, ray.d.z];
-            // The sign of the reciprocal, as the single-ray box test sees it (1/-0 = -∞ < 0,
-            // 1/NaN is not).
-            let near = [0, 1, 2].map(|a| {
-                if d[a].is_sign_negative() && !d[a].is_nan() {
-                    a + 3
+        // Straight from the lanes (this runs for every batch of a deep tree): the sign of the
+        // reciprocal, as the single-ray box test sees it (1/-0 = -∞ < 0, 1/NaN is not), and
+        // the axes of `ShearedRay::axes` (the largest |d|, ties as `Vec3::max_dimension`).
+        let key = |i: usize| {
+            let d = [rays.d[0][i], rays.d[1][i], rays.d[2][i]];
+            let a = d.map(f32::abs);
+            let kz = if a[0] > a[1] {
+                if a[0] > a[2] {
+                    0
                 } else {
-                    a
+                    2
                 }
-            });
-            let c = Self {
-                k: ShearedRay::axes(&ray),
-                near,
+            } else if a[1] > a[2] {
+                1
+            } else {
+                2
             };
-            match common {
-                None => common = Some(c),
-                Some(p) if p != c => return None,
-                Some(_) => {}
+            let negative = |x: f32| (x.is_sign_negative() && !x.is_nan()) as u32;
+            (kz as u32) << 4
+                | ((d[kz] < 0.0) as u32) << 3
+                | negative(d[0]) << 2
+                | negative(d[1]) << 1
+                | negative(d[2])
+        };
+        let first = rays.active.trailing_zeros() as usize;
+        let k0 = key(first);
+        let mut m = rays.active & (rays.active - 1);
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if key(i) != k0 {
+                return None;
             }
         }
-        common
+        let near = [0, 1, 2].map(|a| if k0 >> (2 - a) & 1 == 1 { a + 3 } else { a });
+        Some(Self {
+            k: ShearedRay::axes(&rays.ray(first)),
+            near,
+        })
     }
 }
 

@@ -93,7 +93,7 @@ impl Bvh {
         let mut q = ClosestQuery {
             geometry,
             ray: *ray,
-            tri: TriRay::new(ray, !self.tris.is_empty()),
+            tri: TriRay::new(ray, self.leaf_needs_sheared_ray(r)),
             block: BlockRay::new(ray),
             best: None,
             tests: 0,
@@ -114,7 +114,7 @@ impl Bvh {
         let mut q = AnyQuery {
             geometry,
             ray,
-            tri: TriRay::new(ray, !self.tris.is_empty()),
+            tri: TriRay::new(ray, self.leaf_needs_sheared_ray(r)),
             block: BlockRay::new(ray),
             tests: 0,
         };
@@ -125,6 +125,13 @@ impl Bvh {
 
     /// The root's children when all of them are leaves (a small scene), the root when it is a
     /// leaf, else nothing.
+    /// Whether testing leaf `r` may need the sheared ray of the triangle test (blocks of
+    /// parallelograms, spheres and boxes do not; it costs a division per ray).
+    #[inline(always)]
+    fn leaf_needs_sheared_ray(&self, r: Ref) -> bool {
+        !self.tris.is_empty() && !matches!(r.meta & !COUNT_MASK, QUAD_LEAF | SPHERE_LEAF | BOX_LEAF)
+    }
+
     pub(super) fn flat_root(&self) -> Vec<Ref> {
         if self.root.meta != 0 {
             return if self.root.meta & COUNT_MASK != 0 {
