@@ -234,7 +234,7 @@ impl Bvh {
 }
 
 /// The narrowest registers packets are taken on (see [`super::packet`]).
-const PACKET_LEVEL: SimdLevel = SimdLevel::Avx512;
+const PACKET_LEVEL: SimdLevel = SimdLevel::Avx2;
 
 /// A batch loaded into registers.
 struct Lanes<W: Wide> {
