@@ -271,6 +271,7 @@ fn generate(name: &str, dir: &Path) -> Vec<u8> {
         "obj_2000" => obj(2000),
         "polyhedron_2000" => polyhedron_scene(2000),
         "csg_chain_40" => csg_chain(40),
+        "csg_chain_16" => csg_chain(16),
         "xml_default_bomb" => xml_default_bomb(40),
         "xml_deep" => xml_deep(5000),
         "lang_deep" => lang_deep(5000),
