@@ -485,6 +485,17 @@ impl Builder<'_> {
         let cwd = std::env::current_dir()
             .map(|d| d.join(here))
             .unwrap_or_else(|_| here.to_path_buf());
+        if self.desc.source.path == std::path::Path::new(crate::loaded::STDIN_NAME) {
+            // A scene from standard input has no folder of its own.
+            return Err(self.err(
+                file.pos,
+                format!(
+                    "{what} file '{}' not found in the current directory ('{}')",
+                    file.name,
+                    cwd.display()
+                ),
+            ));
+        }
         Err(self.err(
             file.pos,
             format!(

@@ -3,7 +3,7 @@
 use crate::builder::build_scene;
 use crate::error::SceneError;
 use crate::lang::parse_scene;
-use crate::loaded::{LoadOptions, LoadedScene, RenderHints};
+use crate::loaded::{LoadOptions, LoadedScene, RenderHints, STDIN_NAME};
 use candela_imageio::Limits;
 use std::collections::HashMap;
 use std::path::Path;
@@ -32,9 +32,6 @@ fn load_scene_file(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, Scene
     loaded.inputs.insert(0, path.to_path_buf());
     Ok(loaded)
 }
-
-/// The name standard input takes in messages (`<stdin>:line:col: …`).
-pub const STDIN_NAME: &str = "<stdin>";
 
 /// Reads a whole scene from standard input: at most `limits.max_file_bytes` bytes (the limit of
 /// scene files; more is refused without reading further), not empty, in UTF-8 (an invalid byte

@@ -61,6 +61,9 @@ pub struct LoadedScene {
     pub inputs: Vec<PathBuf>,
 }
 
+/// The name standard input takes in messages (`<stdin>:line:col: …`) when it holds the scene.
+pub const STDIN_NAME: &str = "<stdin>";
+
 /// Largest image width or height (a film's, or the command line's `--width`/`--height`).
 pub const MAX_SIDE: u32 = 1 << 15;
 /// Most samples per pixel (a sampler's `sample_count`, or `--spp`).
