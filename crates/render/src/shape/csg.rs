@@ -133,6 +133,11 @@ pub struct Csg {
     leaves: Vec<u32>,
     /// World boxes of the shared nodes (grown by a margin), empty boxes for the others.
     shared_bounds: Vec<Bounds3>,
+    /// Operations whose operands are twins: the same shared tree at the same placement, or the
+    /// same sphere or box. Their crossings are the same (only the leaf numbers differ), so
+    /// the second operand reuses the first's instead of tracing them again: a chain of named
+    /// doublings `union(s, s)` costs a ray one walk per level, not 2ⁿ.
+    twins: Vec<bool>,
     /// Bounds of the result, empty when it is.
     extent: Bounds3,
     /// `extent`, or the origin when it is empty.
@@ -165,6 +170,7 @@ impl Csg {
         let n = nodes.len();
         let (mut bounds, mut shared_bounds) = (vec![Bounds3::EMPTY; n], vec![Bounds3::EMPTY; n]);
         let (mut leaves, mut depths) = (vec![0u64; n], vec![0u32; n]);
+        let mut twins = vec![false; n];
         for (i, node) in nodes.iter().enumerate() {
             (bounds[i], leaves[i], depths[i]) = match node {
                 CsgNode::Leaf { solid, .. } => (solid.bounds(), 1, 0),
@@ -180,6 +186,40 @@ impl Csg {
                         CsgOp::Difference => ba,
                     };
                     let depth = depths[a].max(depths[b]).saturating_add(1);
+                    twins[i] = a == b
+                        || match (&nodes[a], &nodes[b]) {
+                            (
+                                CsgNode::Shared {
+                                    tree: t,
+                                    placement: p,
+                                },
+                                CsgNode::Shared {
+                                    tree: u,
+                                    placement: q,
+                                },
+                            ) => Arc::ptr_eq(t, u) && p == q,
+                            (
+                                CsgNode::Leaf {
+                                    solid: Solid::Sphere(x),
+                                    ..
+                                },
+                                CsgNode::Leaf {
+                                    solid: Solid::Sphere(y),
+                                    ..
+                                },
+                            ) => x == y,
+                            (
+                                CsgNode::Leaf {
+                                    solid: Solid::Cube(x),
+                                    ..
+                                },
+                                CsgNode::Leaf {
+                                    solid: Solid::Cube(y),
+                                    ..
+                                },
+                            ) => x == y,
+                            _ => false,
+                        };
                     (bounds, leaves[a].saturating_add(leaves[b]), depth)
                 }
                 CsgNode::Shared { tree, placement } => {
@@ -200,6 +240,7 @@ impl Csg {
             // Every node's count is at most the root's (counts only add up towards the root).
             leaves: leaves.into_iter().map(|l| l as u32).collect(),
             shared_bounds,
+            twins,
             extent: b,
             bounds: if b.is_empty() {
                 Bounds3::point(crate::math::Point3::ORIGIN)
@@ -361,8 +402,22 @@ impl Csg {
             }
             &CsgNode::Op { op, a, b } => {
                 let base_b = base + self.leaves[a as usize];
+                let twins = self.twins[node as usize];
+                // A twin's crossing: the first operand's, numbered in the second.
+                let twin = |e: Option<Event>| {
+                    e.map(|e| Event {
+                        leaf: e.leaf - base + base_b,
+                        ..e
+                    })
+                };
                 let mut ea = self.next(a, base, ray, sr, tmin);
-                let mut eb = self.next(b, base_b, ray, sr, tmin);
+                // The first operand's last query (its `tmin`) and answer.
+                let mut last_a = (tmin, ea);
+                let mut eb = if twins {
+                    twin(ea)
+                } else {
+                    self.next(b, base_b, ray, sr, tmin)
+                };
                 loop {
                     let from_a = match (&ea, &eb) {
                         (None, None) => return None,
@@ -404,6 +459,9 @@ impl Csg {
                     }
                     if from_a {
                         ea = self.next(a, base, ray, sr, e.hit.t);
+                        last_a = (e.hit.t, ea);
+                    } else if twins && last_a.0 == e.hit.t {
+                        eb = twin(last_a.1);
                     } else {
                         eb = self.next(b, base_b, ray, sr, e.hit.t);
                     }
@@ -791,5 +849,58 @@ mod tests {
             },
         ]);
         assert_eq!(more, Err(CsgError::TooLarge(1 << 31)));
+    }
+
+    #[test]
+    fn twins_are_traced_once_and_hit_what_copies_hit() {
+        // Each level: an operation on the level below and itself (twins), or on the level
+        // below and a copy of it in another allocation (traced twice). Coincident surfaces are
+        // a degenerate case for CSG, but twins must give exactly what copies give.
+        let walk_from = |c: &Csg, o: Point3, d: Vec3| {
+            let mut out = vec![];
+            let mut r = Ray::new(o, d);
+            while let Some(h) = c.intersect(&r) {
+                let g = c.geometry(&r, &h);
+                out.push((h.t, h.leaf, c.props(&h).material, g.n));
+                r.tmin = h.t;
+            }
+            out
+        };
+        let mut hits = 0;
+        for ops in [
+            [CsgOp::Union, CsgOp::Fusion, CsgOp::Union],
+            [CsgOp::Intersection, CsgOp::Union, CsgOp::Fusion],
+            [CsgOp::Difference, CsgOp::Union, CsgOp::Intersection],
+        ] {
+            let (mut twin, mut copy) = (Arc::new(two(CsgOp::Union)), Arc::new(two(CsgOp::Union)));
+            for level in 0..14 {
+                let op = ops[level % 3];
+                let pair = |a: &Arc<Csg>, b: &Arc<Csg>| {
+                    Arc::new(
+                        Csg::new(vec![
+                            shared(a, 0.0),
+                            shared(b, 0.0),
+                            CsgNode::Op { op, a: 0, b: 1 },
+                        ])
+                        .unwrap(),
+                    )
+                };
+                twin = pair(&twin, &twin);
+                copy = pair(&copy, &Arc::new((*copy).clone()));
+                assert!(twin.twins[2] && !copy.twins[2]);
+            }
+            assert_eq!(twin.leaves(), 1 << 15);
+            for (o, d) in [
+                (Point3::new(-5.0, 0.0, 0.0), Vec3::X),
+                (Point3::new(0.5, 0.0, 0.0), -Vec3::X),
+                (Point3::new(0.5, -3.0, 0.2), Vec3::new(0.1, 1.0, 0.05)),
+                (Point3::new(3.0, 2.0, 1.0), Vec3::new(-1.0, -0.8, -0.5)),
+            ] {
+                let w = walk_from(&twin, o, d);
+                assert_eq!(w, walk_from(&copy, o, d), "{ops:?}");
+                hits += w.len();
+            }
+        }
+        assert!(hits >= 3, "{hits}");
     }
 }
