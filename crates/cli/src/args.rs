@@ -17,7 +17,8 @@ pub struct Cli {
 pub enum Command {
     /// Render the built-in demo scene.
     Demo(RenderArgs),
-    /// Render a scene file (candela language, or Mitsuba 3 XML when it ends in .xml).
+    /// Render a scene file (candela language, or Mitsuba 3 XML when it ends in .xml), or `-`:
+    /// the scene on standard input (XML when its first non-blank character is `<`).
     Render(SceneArgs),
     /// Convert an image between PFM, OpenEXR and PNG (tone mapping for PNG).
     Convert(ConvertArgs),
@@ -31,7 +32,8 @@ pub enum Command {
 /// `render`: a scene file and how to render it.
 #[derive(Args, Debug)]
 pub struct SceneArgs {
-    /// The scene file.
+    /// The scene file, or `-` for standard input (Mitsuba XML when its first non-blank
+    /// character is `<`, the candela language otherwise).
     pub scene: PathBuf,
     /// How to render it.
     #[command(flatten)]

@@ -7,14 +7,16 @@ use candela_render::render::RenderSettings;
 use sha2::{Digest, Sha256};
 use std::path::PathBuf;
 
-/// The SHA-256 (hex) of the contents of `inputs`, in order, each prefixed by its length; the
-/// built-in demo (no inputs) hashes its source text. File names are left out, so the same
-/// files at other paths (another machine's mount point) hash the same.
-pub fn scene_hash(inputs: &[PathBuf], demo_source: &str) -> std::io::Result<String> {
+/// The SHA-256 (hex) of the scene's `text` when it is not a file (the built-in demo, a scene
+/// read from standard input), then of the contents of `inputs` (the scene file and every file
+/// it loads), in order, each prefixed by its length. File names are left out, so the same
+/// files at other paths (another machine's mount point) hash the same, and a scene read from
+/// standard input hashes as the same text in a file.
+pub fn scene_hash(text: Option<&str>, inputs: &[PathBuf]) -> std::io::Result<String> {
     let mut h = Sha256::new();
-    if inputs.is_empty() {
-        h.update(b"demo\0");
-        h.update(demo_source.as_bytes());
+    if let Some(text) = text {
+        h.update((text.len() as u64).to_le_bytes());
+        h.update(text.as_bytes());
     }
     for path in inputs {
         let bytes = std::fs::read(path)?;

@@ -83,13 +83,27 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             crate::outputs::check(&crate::outputs::resolve(&a.outputs, "demo.png"), &[])
         }
         Command::Render(s) => {
-            let xml = s
-                .scene
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+            let stdin = is_stdin(&s.scene);
+            if stdin && std::io::IsTerminal::is_terminal(&std::io::stdin()) {
+                return Err(Usage(
+                    "the scene '-' is standard input, which is a terminal: pipe or redirect a scene into it (candela render - < scene.txt)".into(),
+                ));
+            }
+            // The language of standard input is known once it is read: what depends on it is
+            // checked after loading, as for XML files.
+            let xml = stdin
+                || s.scene
+                    .extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
             render_args(&s.render, xml)?;
+            // Standard input redirected from a file is that file (Linux: /dev/stdin links to it).
+            let scene = if stdin {
+                PathBuf::from("/dev/stdin")
+            } else {
+                s.scene.clone()
+            };
             if let Some(cache) = &s.render.radiosity_cache {
-                if crate::outputs::same_file(cache, &s.scene) {
+                if crate::outputs::same_file(cache, &scene) {
                     return Err(Usage(format!(
                         "--radiosity-cache '{}' is the scene file",
                         cache.display()
@@ -97,7 +111,7 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
                 }
             }
             let outputs = crate::outputs::resolve(&s.render.outputs, &default_output(&s.scene));
-            let mut inputs = vec![s.scene.clone()];
+            let mut inputs = vec![scene];
             inputs.extend(s.render.radiosity_cache.iter().cloned());
             crate::outputs::check(&outputs, &inputs)
         }
@@ -122,8 +136,17 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
     }
 }
 
-/// The default output of `render SCENE`: the scene's name with `.png`, in the current folder.
+/// True when the scene argument is `-`: the scene is read from standard input.
+pub fn is_stdin(scene: &Path) -> bool {
+    scene.as_os_str() == "-"
+}
+
+/// The default output of `render SCENE`: the scene's name with `.png`, in the current folder
+/// (`stdin.png` for `-`, standard input).
 pub fn default_output(scene: &Path) -> String {
+    if is_stdin(scene) {
+        return "stdin.png".to_string();
+    }
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     format!("{stem}.png")
 }

@@ -27,22 +27,47 @@ use std::time::Instant;
 
 /// `candela demo`.
 pub fn demo(args: RenderArgs) -> Result<()> {
-    run_frames(None, &args)
+    run_frames(Source::Demo, &args)
 }
 
-/// `candela render SCENE`.
+/// `candela render SCENE` (`-`: standard input).
 pub fn render(a: SceneArgs) -> Result<()> {
-    run_frames(Some(&a.scene), &a.render)
+    if crate::inputs::is_stdin(&a.scene) {
+        run_frames(Source::Stdin, &a.render)
+    } else {
+        run_frames(Source::File(&a.scene), &a.render)
+    }
 }
 
-/// Renders each frame of `--frames` (or the one frame) of the scene (the demo for `None`).
-fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
+/// Where the scene comes from.
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    /// The built-in demo.
+    Demo,
+    /// A scene file.
+    File(&'a Path),
+    /// Standard input (`render -`), read once for every frame.
+    Stdin,
+}
+
+/// Renders each frame of `--frames` (or the one frame) of the scene.
+fn run_frames(scene: Source<'_>, args: &RenderArgs) -> Result<()> {
     let default_out = match scene {
-        Some(s) => crate::inputs::default_output(s),
-        None => "demo.png".to_string(),
+        Source::File(s) => crate::inputs::default_output(s),
+        Source::Stdin => crate::inputs::default_output(Path::new("-")),
+        Source::Demo => "demo.png".to_string(),
     };
     let outputs = crate::outputs::resolve(&args.outputs, &default_out);
     let base_opts = load_options(args)?;
+    // The scene's text when it is not a file: hashed for partial renders and checkpoints.
+    let text = match scene {
+        Source::Demo => Some(candela_scene::DEMO_SCENE.to_string()),
+        Source::File(_) => None,
+        Source::Stdin => Some(
+            candela_scene::read_stdin_scene(&base_opts.limits)
+                .map_err(|e| anyhow::anyhow!("{e}"))?,
+        ),
+    };
     let mode = ProgressMode::from_args(args.progress.as_deref(), args.quiet)?;
     let frames: Vec<Option<u32>> = match args.frames {
         Some((a, b)) => (a..b).map(Some).collect(),
@@ -86,22 +111,20 @@ fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
             opts.defines.push((args.frame_var.clone(), f.to_string()));
         }
         let start = Instant::now();
-        let loaded = match scene {
-            Some(path) => candela_scene::load_scene(path, &opts),
-            None => candela_scene::demo_scene(&opts),
+        let loaded = match (scene, &text) {
+            (Source::File(path), _) => candela_scene::load_scene(path, &opts),
+            (Source::Stdin, Some(text)) => candela_scene::load_scene_text(text, &opts),
+            _ => candela_scene::demo_scene(&opts),
         }
         // Scene errors carry their own `file:line:col`; print them as they are.
         .map_err(|e| anyhow::anyhow!("{e}"))?;
         let load_seconds = start.elapsed().as_secs_f64();
-        render_frame(
-            loaded,
-            args,
-            &opts.defines,
-            &paths,
-            frame,
-            show,
-            load_seconds,
-        )?;
+        let loaded = Loaded {
+            scene: loaded,
+            text: text.as_deref(),
+            seconds: load_seconds,
+        };
+        render_frame(loaded, args, &opts.defines, &paths, frame, show)?;
     }
     if let (Some(p), true) = (&preview, args.preview_hold) {
         p.hold();
@@ -114,6 +137,15 @@ fn run_frames(scene: Option<&Path>, args: &RenderArgs) -> Result<()> {
 struct Show<'a> {
     mode: ProgressMode,
     preview: Option<&'a Preview>,
+}
+
+/// A frame's loaded scene.
+struct Loaded<'a> {
+    scene: LoadedScene,
+    /// The scene's text when it is not a file (the demo, standard input), for its hash.
+    text: Option<&'a str>,
+    /// Seconds the load took.
+    seconds: f64,
 }
 
 /// The files one frame reads and writes (`%d` already replaced).
@@ -271,14 +303,18 @@ fn save_radiosity_cache(outcome: Option<&RadiosityOutcome>, args: &RenderArgs) -
 }
 
 fn render_frame(
-    mut loaded: LoadedScene,
+    loaded: Loaded<'_>,
     args: &RenderArgs,
     defines: &[(String, String)],
     paths: &FramePaths,
     frame: Option<u32>,
     show: Show<'_>,
-    load_seconds: f64,
 ) -> Result<()> {
+    let Loaded {
+        scene: mut loaded,
+        text,
+        seconds: load_seconds,
+    } = loaded;
     for w in &loaded.warnings {
         eprintln!("candela: warning: {w}");
     }
@@ -365,8 +401,8 @@ fn render_frame(
         });
     let needs_identity = paths.partial.is_some() || checkpoint.is_some();
     let meta = if needs_identity {
-        let scene = identity::scene_hash(&loaded.inputs, candela_scene::DEMO_SCENE)
-            .context("hashing the scene's files")?;
+        let scene =
+            identity::scene_hash(text, &loaded.inputs).context("hashing the scene's files")?;
         Some(PartialMeta {
             spp: settings.spp,
             samples: (target.0, target.0),

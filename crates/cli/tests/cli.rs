@@ -254,3 +254,91 @@ fn stats_report_rays_and_speed() {
     assert!(err.contains("Mrays/s") && err.contains("rays"), "{err}");
     assert!(out.exists());
 }
+
+/// `candela` in `dir` with `args`, standard input read from `input`.
+fn candela_stdin(
+    dir: &std::path::Path,
+    input: &std::path::Path,
+    args: &[&str],
+) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_candela"))
+        .current_dir(dir)
+        .args(args)
+        .stdin(std::fs::File::open(input).unwrap())
+        .output()
+        .expect("the binary runs")
+}
+
+/// `render -` reads the scene from standard input: a candela scene with a mesh and a Mitsuba
+/// scene with meshes (found from the current folder) render the bytes of the same files; a
+/// partial render from standard input merges with one from the file; errors say `<stdin>`.
+#[test]
+fn a_scene_on_standard_input_renders_as_the_file() {
+    let dir = scratch("stdin");
+    let size = ["--width", "24", "--height", "18", "--spp", "2", "-q"];
+    for (folder, scene) in [
+        ("examples", "mesh.scene"),
+        ("examples/mitsuba", "mesh-roughconductor.xml"),
+    ] {
+        let folder = repo().join(folder);
+        let (a, b) = (dir.join("file.pfm"), dir.join("stdin.pfm"));
+        let mut args = vec!["render", scene, "-o", a.to_str().unwrap()];
+        args.extend(size);
+        let o = candela_stdin(&folder, std::path::Path::new("/dev/null"), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        args[1] = "-";
+        args[3] = b.to_str().unwrap();
+        let o = candela_stdin(&folder, &folder.join(scene), &args);
+        assert!(o.status.success(), "{scene}: {}", stderr(&o));
+        assert_eq!(
+            std::fs::read(&a).unwrap(),
+            std::fs::read(&b).unwrap(),
+            "{scene}"
+        );
+    }
+    // Half the samples from standard input, half from the file: one render.
+    let scene = dir.join("s.scene");
+    std::fs::write(
+        &scene,
+        "material m(diffuse(<0.8, 0.5, 0.2>))\nsphere(m, translation([3, 0, 0]))\ncamera(perspective, identity, 1, 1)\n",
+    )
+    .unwrap();
+    let run = |input: &str, extra: &[&str]| {
+        let mut args = vec!["render", input];
+        args.extend(size);
+        args.extend(extra);
+        let o = candela_stdin(&dir, &scene, &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    run("-", &["--samples", "0..1", "--partial", "a.part"]);
+    run("s.scene", &["--samples", "1..2", "--partial", "b.part"]);
+    run("s.scene", &["-o", "whole.pfm"]);
+    let o = candela(&[
+        "merge",
+        "-o",
+        dir.join("merged.pfm").to_str().unwrap(),
+        dir.join("a.part").to_str().unwrap(),
+        dir.join("b.part").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(dir.join("merged.pfm")).unwrap(),
+        std::fs::read(dir.join("whole.pfm")).unwrap()
+    );
+    // The default output is stdin.png.
+    run("-", &[]);
+    assert!(dir.join("stdin.png").exists());
+    std::fs::write(
+        &scene,
+        "material m(diffuse(<1, 1, 1>))\n\nbox(m, nowhere)\n",
+    )
+    .unwrap();
+    let o = candela_stdin(&dir, &scene, &["render", "-", "-q", "-o", "x.pfm"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).starts_with("candela: error: <stdin>:3:8: "),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.join("x.pfm").exists());
+}

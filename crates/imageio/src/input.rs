@@ -154,6 +154,28 @@ pub fn read_file(path: &Path, max_bytes: u64) -> Result<Vec<u8>, InputError> {
     Ok(bytes)
 }
 
+/// Reads standard input to its end, at most `max_bytes` of it: more is refused as soon as one
+/// byte more has been read (an endless stream such as `/dev/zero` stops there). The input is
+/// read in pieces, so memory grows with what was read, not with the limit.
+pub fn read_stdin(max_bytes: u64) -> Result<Vec<u8>, InputError> {
+    read_capped(std::io::stdin().lock(), max_bytes)
+}
+
+/// Reads `r` to its end, at most `max_bytes` of it ([`InputError::TooLarge`] beyond).
+pub fn read_capped(r: impl Read, max_bytes: u64) -> Result<Vec<u8>, InputError> {
+    let mut bytes = Vec::new();
+    r.take(max_bytes.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(InputError::Io)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(InputError::TooLarge {
+            size: bytes.len() as u64,
+            max: max_bytes,
+        });
+    }
+    Ok(bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,6 +190,23 @@ mod tests {
             let e = read_file(Path::new(path), 1 << 20).unwrap_err();
             assert_eq!(e.to_string(), format!("it is {kind}, not a regular file"));
         }
+    }
+
+    #[test]
+    fn streams_are_read_up_to_the_limit() {
+        assert_eq!(read_capped(&b"0123456789"[..], 10).unwrap(), b"0123456789");
+        let endless = std::io::repeat(0);
+        let e = read_capped(endless, 1000).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                InputError::TooLarge {
+                    size: 1001,
+                    max: 1000
+                }
+            ),
+            "{e}"
+        );
     }
 
     #[test]

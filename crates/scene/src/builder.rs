@@ -12,7 +12,7 @@ use crate::lang::ast::{
     self, BrdfKind, LightKind, PigmentKind, SceneDescription, ShapeKind, SpectrumDef,
     MAX_SPECTRUM_SAMPLES,
 };
-use crate::loaded::{check_mesh_memory, INSTANCE_BYTES, MAX_CSG_NODES, MAX_SHAPES};
+use crate::loaded::{check_mesh_memory, INSTANCE_BYTES, MAX_CSG_SOLIDS, MAX_SHAPES};
 use candela_imageio::Limits;
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
@@ -27,8 +27,8 @@ use candela_render::material::{
 use candela_render::math::{Transform, Vec3};
 use candela_render::scene::SceneBuilder;
 use candela_render::shape::{
-    Csg, CsgNode, CsgOp, Cube, Cylinder, Mesh, Parallelogram, Plane, Polygon, PolygonError,
-    Polyhedron, Shape, Solid, Sphere,
+    Csg, CsgError, CsgNode, CsgOp, Cube, Cylinder, Mesh, Parallelogram, Plane, Polygon,
+    PolygonError, Polyhedron, Shape, Solid, Sphere,
 };
 use candela_render::spectrum::{metal, RgbRole, Spectrum};
 use candela_render::texture::{ImageTexture, Texture};
@@ -68,6 +68,7 @@ pub fn build_scene(
         spectra: HashMap::new(),
         meshes: HashMap::new(),
         groups: HashMap::new(),
+        csg_trees: HashMap::new(),
         instances: 0,
         report: BuildReport::default(),
         mesh_bytes: 0.0,
@@ -98,6 +99,9 @@ struct Builder<'a> {
     meshes: HashMap<PathBuf, Arc<Mesh>>,
     /// Shared groups of meshes placed through instances: (file, material) → group.
     groups: HashMap<(PathBuf, MaterialId), u32>,
+    /// The CSG trees of named shapes used in CSG trees (or placed), built once and shared by
+    /// every use: named shape index → tree in the named shape's own coordinates.
+    csg_trees: HashMap<usize, Arc<Csg>>,
     /// Instances of those groups placed so far.
     instances: usize,
     report: BuildReport,
@@ -481,6 +485,17 @@ impl Builder<'_> {
         let cwd = std::env::current_dir()
             .map(|d| d.join(here))
             .unwrap_or_else(|_| here.to_path_buf());
+        if self.desc.source.path == std::path::Path::new(crate::loaded::STDIN_NAME) {
+            // A scene from standard input has no folder of its own.
+            return Err(self.err(
+                file.pos,
+                format!(
+                    "{what} file '{}' not found in the current directory ('{}')",
+                    file.name,
+                    cwd.display()
+                ),
+            ));
+        }
         Err(self.err(
             file.pos,
             format!(
@@ -528,13 +543,7 @@ impl Builder<'_> {
             return Err(self.err(shape.pos, "shapes are nested too deeply"));
         }
         if !matches!(shape.kind, ShapeKind::Instance { .. }) {
-            self.shapes += 1;
-            if self.shapes > MAX_SHAPES {
-                return Err(self.err(
-                    shape.pos,
-                    format!("the scene places more than {MAX_SHAPES} shapes (every copy of an instance counted; see docs/limits.md)"),
-                ));
-            }
+            self.count_shape(shape.pos)?;
         }
         let place = |b: &Self, t: &Transform| b.check_transform(&(*extra * *t), shape.pos);
         match &shape.kind {
@@ -650,16 +659,37 @@ impl Builder<'_> {
             ShapeKind::Csg { .. } => {
                 let mut nodes = Vec::new();
                 self.csg(shape, extra, &mut nodes, depth)?;
-                let csg = Csg::new(nodes).ok_or_else(|| self.err(shape.pos, "invalid CSG tree"))?;
+                let csg = self.csg_tree(nodes, shape.pos)?;
                 self.scene.add_shape(Shape::Csg(Box::new(csg)), 0, None);
             }
             ShapeKind::Instance {
                 index, transform, ..
             } => {
-                let t = place(self, transform)?;
                 let named = &self.desc.named_shape(*index).shape;
+                if matches!(named.kind, ShapeKind::Csg { .. }) {
+                    // A named CSG shape placed in the world: a reference to its shared tree.
+                    self.count_shape(shape.pos)?;
+                    let mut nodes = Vec::new();
+                    self.csg(shape, extra, &mut nodes, depth)?;
+                    let csg = self.csg_tree(nodes, shape.pos)?;
+                    self.scene.add_shape(Shape::Csg(Box::new(csg)), 0, None);
+                    return Ok(());
+                }
+                let t = place(self, transform)?;
                 self.add_shape(named, &t, depth + 1)?;
             }
+        }
+        Ok(())
+    }
+
+    /// Counts one more shape placed in the world (at `pos`), failing beyond the limit.
+    fn count_shape(&mut self, pos: Pos) -> Result<(), SceneError> {
+        self.shapes += 1;
+        if self.shapes > MAX_SHAPES {
+            return Err(self.err(
+                pos,
+                format!("the scene places more than {MAX_SHAPES} shapes (every copy of an instance counted; see docs/limits.md)"),
+            ));
         }
         Ok(())
     }
@@ -740,7 +770,44 @@ impl Builder<'_> {
         })
     }
 
+    /// The CSG tree of the named shape `index` in its own coordinates, built on its first use
+    /// (at nesting depth `depth`) and shared by all.
+    fn shared_csg(&mut self, index: usize, depth: u32) -> Result<Arc<Csg>, SceneError> {
+        if let Some(tree) = self.csg_trees.get(&index) {
+            return Ok(tree.clone());
+        }
+        let named = &self.desc.named_shape(index).shape;
+        let mut nodes = Vec::new();
+        self.csg(named, &Transform::IDENTITY, &mut nodes, depth)?;
+        let tree = Arc::new(self.csg_tree(nodes, named.pos)?);
+        self.csg_trees.insert(index, tree.clone());
+        Ok(tree)
+    }
+
+    /// The CSG tree of `nodes` (written at `pos`), within the limits on its expanded size.
+    fn csg_tree(&self, nodes: Vec<CsgNode>, pos: Pos) -> Result<Csg, SceneError> {
+        let too_large = |n: u64| {
+            self.err(
+                pos,
+                format!("the CSG tree expands to {n} solids, more than {MAX_CSG_SOLIDS} (every use of a named shape counted: a ray may have to test each; see docs/limits.md)"),
+            )
+        };
+        let csg = Csg::new(nodes).map_err(|e| match e {
+            CsgError::TooLarge(n) => too_large(n),
+            CsgError::Invalid => self.err(pos, "invalid CSG tree"),
+        })?;
+        if csg.leaves() as usize > MAX_CSG_SOLIDS {
+            return Err(too_large(csg.leaves() as u64));
+        }
+        if csg.depth() > MAX_NESTING {
+            return Err(self.err(pos, "shapes are nested too deeply"));
+        }
+        Ok(csg)
+    }
+
     /// Appends the CSG nodes of `shape` (operands first) and returns the index of its root.
+    /// A named shape used as an operand is a [`CsgNode::Shared`] reference to its tree, built
+    /// once (spheres and boxes, as small as a reference, are copied).
     fn csg(
         &mut self,
         shape: &ast::Shape,
@@ -750,12 +817,6 @@ impl Builder<'_> {
     ) -> Result<u32, SceneError> {
         if depth > MAX_NESTING {
             return Err(self.err(shape.pos, "shapes are nested too deeply"));
-        }
-        if nodes.len() >= MAX_CSG_NODES {
-            return Err(self.err(
-                shape.pos,
-                format!("the CSG tree has more than {MAX_CSG_NODES} nodes (every use of a named shape counted; see docs/limits.md)"),
-            ));
         }
         let leaf = |solid: Solid, m: &ast::MaterialRef, b: &Self, nodes: &mut Vec<CsgNode>| {
             let (material, emission) = b.props(m);
@@ -810,7 +871,16 @@ impl Builder<'_> {
             ShapeKind::Instance { index, transform, .. } => {
                 let t = self.check_transform(&(*extra * *transform), shape.pos)?;
                 let named = &self.desc.named_shape(*index).shape;
-                self.csg(named, &t, nodes, depth + 1)
+                if matches!(named.kind, ShapeKind::Sphere { .. } | ShapeKind::Box { .. }) {
+                    // As small as a reference: copied.
+                    return self.csg(named, &t, nodes, depth + 1);
+                }
+                let tree = self.shared_csg(*index, depth + 1)?;
+                if depth + 1 + tree.depth() > MAX_NESTING {
+                    return Err(self.err(shape.pos, "shapes are nested too deeply"));
+                }
+                nodes.push(CsgNode::Shared { tree, placement: t });
+                Ok((nodes.len() - 1) as u32)
             }
             ShapeKind::Plane { .. } | ShapeKind::Triangle { .. } | ShapeKind::Parallelogram { .. } | ShapeKind::Polygon { .. } | ShapeKind::Cylinder { .. } => Err(self.err(
                 shape.pos,

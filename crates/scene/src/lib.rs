@@ -21,5 +21,7 @@ pub mod serialized;
 
 pub use error::{Pos, SceneError, SourceFile};
 pub use lang::{parse_define, parse_scene, parse_scene_file, SceneDescription};
-pub use load::{demo_scene, load_scene, DEMO_SCENE};
-pub use loaded::{LoadOptions, LoadedScene, RenderHints};
+pub use load::{
+    demo_scene, is_xml_text, load_scene, load_scene_text, read_stdin_scene, DEMO_SCENE,
+};
+pub use loaded::{LoadOptions, LoadedScene, RenderHints, STDIN_NAME};

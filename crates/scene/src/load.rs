@@ -3,7 +3,7 @@
 use crate::builder::build_scene;
 use crate::error::SceneError;
 use crate::lang::parse_scene;
-use crate::loaded::{LoadOptions, LoadedScene, RenderHints};
+use crate::loaded::{LoadOptions, LoadedScene, RenderHints, STDIN_NAME};
 use candela_imageio::Limits;
 use std::collections::HashMap;
 use std::path::Path;
@@ -30,6 +30,57 @@ fn load_scene_file(path: &Path, opts: &LoadOptions) -> Result<LoadedScene, Scene
         load_candela(path, &text, opts, RenderHints::default())
     }?;
     loaded.inputs.insert(0, path.to_path_buf());
+    Ok(loaded)
+}
+
+/// Reads a whole scene from standard input: at most `limits.max_file_bytes` bytes (the limit of
+/// scene files; more is refused without reading further), not empty, in UTF-8 (an invalid byte
+/// is reported at its line and column of `<stdin>`).
+pub fn read_stdin_scene(limits: &Limits) -> Result<String, SceneError> {
+    use candela_imageio::input::InputError;
+    let bytes = candela_imageio::input::read_stdin(limits.max_file_bytes).map_err(|e| {
+        SceneError::new(
+            STDIN_NAME,
+            match e {
+                InputError::TooLarge { max, .. } => format!(
+                    "standard input holds more than {max} bytes, the limit of a scene file (a quarter of --max-memory)"
+                ),
+                e => format!("cannot read the scene from standard input: {e}"),
+            },
+        )
+    })?;
+    if bytes.is_empty() {
+        return Err(SceneError::new(
+            STDIN_NAME,
+            "standard input is empty: no scene to render",
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| SceneError::invalid_utf8(STDIN_NAME, &e))
+}
+
+/// True when `text` is Mitsuba XML: its first character other than white space (after a
+/// byte-order mark) is `<` (no statement of the candela language starts with one).
+pub fn is_xml_text(text: &str) -> bool {
+    text.trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with('<')
+}
+
+/// Loads a scene read from standard input ([`read_stdin_scene`]): Mitsuba 3 XML when
+/// [`is_xml_text`], the candela language otherwise. Messages name it `<stdin>`, and the files it
+/// names (meshes, images, includes) are found relative to the current directory. The inputs
+/// of the result are the files it read (no scene file).
+pub fn load_scene_text(text: &str, opts: &LoadOptions) -> Result<LoadedScene, SceneError> {
+    let path = Path::new(STDIN_NAME);
+    let (loaded, inputs) = crate::inputs::collecting(|| {
+        if is_xml_text(text) {
+            crate::mitsuba::load_mitsuba(path, text, opts)
+        } else {
+            load_candela(path, text, opts, RenderHints::default())
+        }
+    });
+    let mut loaded = loaded?;
+    loaded.inputs = inputs;
     Ok(loaded)
 }
 

@@ -61,6 +61,9 @@ pub struct LoadedScene {
     pub inputs: Vec<PathBuf>,
 }
 
+/// The name standard input takes in messages (`<stdin>:line:col: …`) when it holds the scene.
+pub const STDIN_NAME: &str = "<stdin>";
+
 /// Largest image width or height (a film's, or the command line's `--width`/`--height`).
 pub const MAX_SIDE: u32 = 1 << 15;
 /// Most samples per pixel (a sampler's `sample_count`, or `--spp`).
@@ -68,8 +71,10 @@ pub const MAX_SPP: u32 = 1 << 20;
 
 /// Most shapes a scene may place (instances of instances count each copy).
 pub const MAX_SHAPES: usize = 1 << 22;
-/// Most nodes (operands and operations) in one CSG tree, instances expanded.
-pub const MAX_CSG_NODES: usize = 1 << 16;
+/// Most solids in one CSG tree expanded (every use of a named shape counted): the most a ray
+/// may have to test. Named shapes are shared, not copied, so memory grows with the distinct
+/// nodes only; this bounds the time.
+pub const MAX_CSG_SOLIDS: usize = 1 << 16;
 /// Bytes of mesh data (each placed copy counted) per byte of `--max-memory`: meshes and their
 /// acceleration structure may take at most half of the budget.
 pub const MESH_MEMORY_FRACTION: f64 = 0.5;

@@ -265,3 +265,154 @@ fn course_instances_of_a_mesh_share_it() {
     assert_eq!(c.scene.geometry.meshes().len(), 2);
     assert_eq!(c.scene.lights.len(), 2);
 }
+
+/// The distinct CSG nodes of `csg`, following shared trees once each, and the number of trees.
+fn distinct_csg_nodes(csg: &candela_render::shape::Csg) -> (usize, usize) {
+    use candela_render::shape::{Csg, CsgNode};
+    let mut seen: Vec<*const Csg> = vec![];
+    let mut todo = vec![csg];
+    let mut nodes = 0;
+    while let Some(t) = todo.pop() {
+        nodes += t.nodes().len();
+        for n in t.nodes() {
+            if let CsgNode::Shared { tree, .. } = n {
+                if !seen.contains(&std::sync::Arc::as_ptr(tree)) {
+                    seen.push(std::sync::Arc::as_ptr(tree));
+                    todo.push(tree);
+                }
+            }
+        }
+    }
+    (nodes, seen.len())
+}
+
+/// The CSG trees of the scene's objects.
+fn csg_trees(s: &Scene) -> Vec<&candela_render::shape::Csg> {
+    s.geometry
+        .objects()
+        .iter()
+        .filter_map(|o| match &o.shape {
+            candela_render::shape::Shape::Csg(c) => Some(&**c),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Named CSG shapes used several times share one tree (placed by a transformation, rays
+/// entering by its inverse), and hit what the same trees written out in full hit: every
+/// operation, rotations, a non-uniform scaling, a placed copy of the whole.
+#[test]
+fn course_named_csg_shapes_share_their_tree() {
+    let dir = tmpdir("course-csg");
+    let head = "material red(diffuse(<0.8, 0.2, 0.2>))\nmaterial blue(diffuse(<0.2, 0.2, 0.8>))\n";
+    let a = |t: &str| {
+        format!("difference(box(red, identity), sphere(blue, scaling([1.3, 1.3, 1.3])), {t})")
+    };
+    let ta = "translation([3, 0, 0]) * rotation_z(30)";
+    let b = |t: &str| format!("union({}, {}, {t})", a("identity"), a(ta));
+    let tb = "translation([0, 3, 0]) * scaling([1, 0.5, 1])";
+    let c = |t: &str| format!("fusion({}, {}, {t})", b("identity"), b(tb));
+    let tc = "translation([-4, -4, 0]) * rotation_x(15)";
+    let d = |t: &str| {
+        format!(
+            "intersection({}, box(blue, scaling([9, 9, 0.8])), {t})",
+            c("identity")
+        )
+    };
+    let shared = format!(
+        "{head}shape a({})\nshape b(union(a, instance(a, {ta})))\nshape c(fusion(b, instance(b, {tb})))\nc\ninstance(c, {tc})\nintersection(c, box(blue, scaling([9, 9, 0.8])), translation([0, 0, 0.5]))\n",
+        a("identity")
+    );
+    let flat = format!(
+        "{head}{}\n{}\n{}\n",
+        c("identity"),
+        c(tc),
+        d("translation([0, 0, 0.5])")
+    );
+    let load = |name: &str, text: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        load_scene(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let s = load("shared.txt", &shared);
+    let f = load("flat.txt", &flat);
+    let (ts, tf) = (csg_trees(&s.scene), csg_trees(&f.scene));
+    assert_eq!((ts.len(), tf.len()), (3, 3));
+    for (x, y) in ts.iter().zip(&tf) {
+        assert_eq!(x.leaves(), y.leaves());
+    }
+    assert_eq!(ts[0].leaves(), 8);
+    // The three placements of c hold one copy of a's, b's and c's nodes between them.
+    let flat_nodes: usize = tf.iter().map(|t| t.nodes().len()).sum();
+    assert_eq!(flat_nodes, 3 * 15 + 2);
+    let (shared_nodes, trees) = ts
+        .iter()
+        .map(|t| distinct_csg_nodes(t))
+        .fold((0, 0), |a, b| (a.0 + b.0, a.1.max(b.1)));
+    assert_eq!(trees, 3);
+    assert!(shared_nodes < 3 * 15, "{shared_nodes}");
+    // The same surface up to round-off, but for rays grazing an edge where round-off may pick
+    // the other surface (a box's corners meet the subtracted sphere's surface at shallow angles).
+    let mut st = RayStats::default();
+    let (mut hits, mut differ) = (0, 0);
+    let rays = rays(9, 40_000);
+    for r in &rays {
+        match (s.scene.interact(r, &mut st), f.scene.interact(r, &mut st)) {
+            (Some(x), Some(y))
+                if (x.p - y.p).norm() < 1e-4
+                    && x.n.to_vec().approx_eq(y.n.to_vec(), 1e-3)
+                    && x.props.material == y.props.material =>
+            {
+                hits += 1
+            }
+            (None, None) => {}
+            (x, y) => {
+                eprintln!("{:?} {:?}", x.map(|x| (x.p, x.n)), y.map(|y| (y.p, y.n)));
+                differ += 1
+            }
+        }
+    }
+    assert!(hits > 5_000, "{hits}");
+    assert!(
+        differ * 2000 < rays.len(),
+        "{differ} of {} rays differ",
+        rays.len()
+    );
+}
+
+/// A chain of 40 named doublings (2⁴⁰ solids expanded) is refused by its expanded size at the
+/// level that crosses the limit, without building the expansion; 16 levels (65 536 solids)
+/// load as 16 shared nodes.
+#[test]
+fn csg_doubling_chains_are_refused_by_their_expanded_size_only() {
+    let dir = tmpdir("csg-chain");
+    let chain = |n: usize| {
+        let mut s =
+            String::from("material m(diffuse(<0.5, 0.5, 0.5>))\nshape s0(sphere(m, identity))\n");
+        for i in 1..=n {
+            s += &format!(
+                "shape s{i}(union(s{p}, instance(s{p}, translation([0, 0, 0.25]))))\n",
+                p = i - 1
+            );
+        }
+        s + &format!("s{n}\n")
+    };
+    let path = dir.join("chain16.txt");
+    std::fs::write(&path, chain(16)).unwrap();
+    let s = load_scene(&path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let t = csg_trees(&s.scene);
+    assert_eq!(t[0].leaves(), 1 << 16);
+    let (nodes, trees) = distinct_csg_nodes(t[0]);
+    assert_eq!(trees, 16);
+    assert!(nodes <= 3 * 16 + 1, "{nodes}");
+    let path = dir.join("chain40.txt");
+    std::fs::write(&path, chain(40)).unwrap();
+    let e = load_scene(&path, &LoadOptions::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("chain40.txt:19:11: the CSG tree expands to 131072 solids, more than 65536"),
+        "{e}"
+    );
+}

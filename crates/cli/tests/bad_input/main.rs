@@ -7,9 +7,11 @@
 //! Row format (`|`-separated, `#` comments): `name | files | command | status | stderr pattern
 //! [| post-check]`. `files` is a `;;`-separated list of `NAME=TEXT` (with `\n`, `\t`, `\xHH`
 //! escapes), `NAME@fifo`, `NAME@dir`, `NAME@link:TARGET` or `NAME@gen:GENERATOR` (see
-//! [`generate`]). `command` is the shell text after the binary (redirections allowed). The
-//! post-checks (`,`-separated): `finite:FILE.pfm` reads an output PFM and requires every value
-//! finite and ≥ 0; `changed:FILE` lets an input change (a radiosity cache solved again).
+//! [`generate`]). `command` is the shell text after the binary (redirections allowed: `< FILE`
+//! feeds standard input, which is otherwise empty). The post-checks (`,`-separated):
+//! `finite:FILE.pfm` reads an output PFM and requires every value finite and ≥ 0;
+//! `exists:FILE` requires an output that is not empty; `changed:FILE` lets an input change (a
+//! radiosity cache solved again).
 
 use std::collections::BTreeMap;
 use std::fs;
@@ -271,6 +273,7 @@ fn generate(name: &str, dir: &Path) -> Vec<u8> {
         "obj_2000" => obj(2000),
         "polyhedron_2000" => polyhedron_scene(2000),
         "csg_chain_40" => csg_chain(40),
+        "csg_chain_16" => csg_chain(16),
         "xml_default_bomb" => xml_default_bomb(40),
         "xml_deep" => xml_deep(5000),
         "lang_deep" => lang_deep(5000),
@@ -351,6 +354,12 @@ fn post_check(checks: &str, dir: &Path) -> Result<(), String> {
     for check in checks.split(',').map(str::trim).filter(|c| !c.is_empty()) {
         if check.starts_with("changed:") {
             continue;
+        }
+        if let Some(file) = check.strip_prefix("exists:") {
+            match fs::metadata(dir.join(file)) {
+                Ok(m) if m.is_file() && m.len() > 0 => continue,
+                _ => return Err(format!("{file} was not written")),
+            }
         }
         let Some(file) = check.strip_prefix("finite:") else {
             return Err(format!("unknown post-check {check}"));

@@ -19,7 +19,7 @@ mod polygon;
 mod polyhedron;
 mod sphere;
 
-pub use csg::{Csg, CsgNode, CsgOp, Solid};
+pub use csg::{Csg, CsgError, CsgNode, CsgOp, Solid, MAX_EXPANDED_LEAVES};
 pub use cube::Cube;
 pub use cylinder::Cylinder;
 pub use disk::Disk;
