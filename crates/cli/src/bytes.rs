@@ -28,6 +28,25 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
     Ok(bytes)
 }
 
+/// Parses `--max-memory`: a byte count ([`parse_bytes`]) of at most half the process's
+/// address-space limit (`ulimit -v`), when there is one: a larger budget would let an
+/// allocation fail (an abort) instead of the limit's message.
+pub fn parse_budget(s: &str) -> Result<u64, String> {
+    let bytes = parse_bytes(s)?;
+    within_address_space(s, bytes, crate::inputs::address_space_limit())
+}
+
+fn within_address_space(s: &str, bytes: u64, limit: Option<u64>) -> Result<u64, String> {
+    match limit {
+        Some(limit) if bytes > limit / 2 => Err(format!(
+            "'{s}' is more than half of the address space this process may use (ulimit -v: {} MiB); at most {}M",
+            limit >> 20,
+            (limit / 2) >> 20
+        )),
+        _ => Ok(bytes),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -43,5 +62,15 @@ mod tests {
         assert!(parse_bytes("99999999999T")
             .unwrap_err()
             .contains("too large"));
+        assert_eq!(within_address_space("1G", 1 << 30, None), Ok(1 << 30));
+        assert_eq!(
+            within_address_space("1G", 1 << 30, Some(2 << 30)),
+            Ok(1 << 30)
+        );
+        let e = within_address_space("1T", 1 << 40, Some(1 << 30)).unwrap_err();
+        assert!(
+            e.contains("ulimit -v: 1024 MiB") && e.contains("at most 512M"),
+            "{e}"
+        );
     }
 }

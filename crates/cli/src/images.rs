@@ -7,7 +7,7 @@ use crate::args::ToneArgs;
 pub use crate::inputs::parse_aovs;
 use anyhow::{bail, Context, Result};
 use candela_denoise::Auxiliaries;
-use candela_imageio::exr::{read_exr_channels, write_exr_layers, AovLayer};
+use candela_imageio::exr::{read_exr_channels_within, write_exr_layers, AovLayer};
 use candela_imageio::{write_atomically, Encoding, Format, ToneMap};
 use candela_render::aov::AovSet;
 use candela_render::film::{Film, Window};
@@ -204,9 +204,12 @@ pub fn denoise_command(a: DenoiseArgs) -> Result<()> {
         );
     }
     let is_exr = Format::from_path(&a.input).ok() == Some(Format::Exr);
+    // An input file as any other: a regular file within the memory budget's limits.
+    let limits = candela_imageio::Limits::from_memory(crate::inputs::max_memory(None));
     let (beauty, albedo, normal) = if is_exr {
-        let bytes = std::fs::read(&a.input).with_context(|| format!("'{}'", a.input.display()))?;
-        let (w, h, channels) = read_exr_channels(&bytes)
+        let bytes = candela_imageio::input::read_file(&a.input, limits.max_file_bytes)
+            .map_err(|e| anyhow::anyhow!("'{}': {e}", a.input.display()))?;
+        let (w, h, channels) = read_exr_channels_within(&bytes, &limits)
             .map_err(|e| anyhow::anyhow!("'{}': {e}", a.input.display()))?;
         let find = |names: [&str; 3]| -> Option<Vec<f32>> {
             let cs: Vec<&Vec<f32>> = names
@@ -231,7 +234,7 @@ pub fn denoise_command(a: DenoiseArgs) -> Result<()> {
             find(["normal.X", "normal.Y", "normal.Z"]),
         )
     } else {
-        let img = candela_imageio::read_image(&a.input)
+        let img = candela_imageio::read_image_within(&a.input, &limits)
             .map_err(|e| anyhow::anyhow!("'{}': {e}", a.input.display()))?;
         (img, None, None)
     };

@@ -80,7 +80,8 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
     match command {
         Command::Demo(a) => {
             render_args(a, false)?;
-            crate::outputs::check(&crate::outputs::resolve(&a.outputs, "demo.png"), &[])
+            crate::outputs::check(&crate::outputs::resolve(&a.outputs, "demo.png"), &[])?;
+            partial_targets(a, &[])
         }
         Command::Render(s) => {
             let xml = s
@@ -99,7 +100,8 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             let outputs = crate::outputs::resolve(&s.render.outputs, &default_output(&s.scene));
             let mut inputs = vec![s.scene.clone()];
             inputs.extend(s.render.radiosity_cache.iter().cloned());
-            crate::outputs::check(&outputs, &inputs)
+            crate::outputs::check(&outputs, &inputs)?;
+            partial_targets(&s.render, &inputs)
         }
         Command::Convert(c) => crate::outputs::check(
             std::slice::from_ref(&c.output),
@@ -110,16 +112,36 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             std::slice::from_ref(&d.input),
         ),
         Command::Merge(m) => {
-            // Image outputs as any other; partial-file outputs are checked by `merge`.
-            let images: Vec<PathBuf> = m
+            // Image outputs as any other; partial-file outputs (their extensions are checked
+            // by `merge`) must be usable targets too, so that nothing is written when one is not.
+            let (images, partials): (Vec<PathBuf>, Vec<PathBuf>) = m
                 .outputs
                 .iter()
-                .filter(|o| candela_imageio::supported_extension(o))
                 .cloned()
-                .collect();
-            crate::outputs::check(&images, &m.parts)
+                .partition(|o| candela_imageio::supported_extension(o));
+            crate::outputs::check(&images, &m.parts)?;
+            for p in &partials {
+                if !crate::outputs::is_stdout(p) {
+                    crate::outputs::check_partial_target("--output", p, &images, &[])?;
+                }
+            }
+            Ok(())
         }
     }
+}
+
+/// Checks the partial files a render writes (`--partial`, `--checkpoint`) like outputs: each a
+/// regular file or nothing, neither an image output nor an input, not the same file twice.
+fn partial_targets(a: &RenderArgs, inputs: &[PathBuf]) -> Result<(), Usage> {
+    if let Some(p) = &a.partial {
+        crate::outputs::check_partial_target("--partial", p, &a.outputs, inputs)?;
+    }
+    if let Some(c) = &a.checkpoint {
+        let mut others = a.outputs.clone();
+        others.extend(a.partial.iter().cloned());
+        crate::outputs::check_partial_target("--checkpoint", c, &others, inputs)?;
+    }
+    Ok(())
 }
 
 /// The default output of `render SCENE`: the scene's name with `.png`, in the current folder.

@@ -90,6 +90,34 @@ pub fn not_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> 
     Ok(())
 }
 
+/// Checks a partial file a render writes (`--partial`, `--checkpoint`, given as `option`)
+/// before any work, as an output: a regular file or nothing in an existing folder, not one of
+/// the image `outputs`, not one of `inputs`.
+pub fn check_partial_target(
+    option: &str,
+    path: &Path,
+    outputs: &[PathBuf],
+    inputs: &[PathBuf],
+) -> Result<(), Usage> {
+    candela_imageio::check_target(path)
+        .map_err(|e| Usage(format!("{option} '{}': {e}", path.display())))?;
+    if let Some(o) = outputs.iter().find(|o| *o == path || same_file(o, path)) {
+        return Err(Usage(format!(
+            "{option} '{}' is also given as --output '{}'",
+            path.display(),
+            o.display()
+        )));
+    }
+    if let Some(i) = inputs.iter().find(|i| *i == path || same_file(i, path)) {
+        return Err(Usage(format!(
+            "{option} '{}' is an input of this run ('{}'): refusing to overwrite it",
+            path.display(),
+            i.display()
+        )));
+    }
+    Ok(())
+}
+
 /// True when `a` and `b` name the same existing file.
 pub fn same_file(a: &Path, b: &Path) -> bool {
     match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {

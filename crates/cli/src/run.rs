@@ -283,6 +283,14 @@ fn render_frame(
         eprintln!("candela: warning: {w}");
     }
     crate::outputs::not_inputs(&paths.outputs, &loaded.inputs)?;
+    for (option, path) in [
+        ("--partial", &paths.partial),
+        ("--checkpoint", &paths.checkpoint),
+    ] {
+        if let Some(p) = path {
+            crate::outputs::check_partial_target(option, p, &[], &loaded.inputs)?;
+        }
+    }
     let hints = &loaded.hints;
     let name = args
         .integrator
