@@ -33,7 +33,14 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
 /// allocation fail (an abort) instead of the limit's message.
 pub fn parse_budget(s: &str) -> Result<u64, String> {
     let bytes = parse_bytes(s)?;
-    within_address_space(s, bytes, crate::inputs::address_space_limit())
+    within_address_space(s, bytes, address_space_limit())
+}
+
+/// The process's address-space limit (`RLIMIT_AS`), read from `/proc/self/limits`.
+pub fn address_space_limit() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line.split_whitespace().nth(3)?.parse().ok()
 }
 
 fn within_address_space(s: &str, bytes: u64, limit: Option<u64>) -> Result<u64, String> {

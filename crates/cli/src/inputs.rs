@@ -63,12 +63,7 @@ pub fn max_memory(option: Option<u64>) -> u64 {
     })
 }
 
-/// The process's address-space limit (`RLIMIT_AS`), read from `/proc/self/limits`.
-pub fn address_space_limit() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
-    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
-    line.split_whitespace().nth(3)?.parse().ok()
-}
+pub use crate::bytes::address_space_limit;
 
 /// The limits of readers for these options.
 pub fn limits(args: &RenderArgs) -> Limits {
@@ -80,7 +75,8 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
     match command {
         Command::Demo(a) => {
             render_args(a, false)?;
-            crate::outputs::check(&crate::outputs::resolve(&a.outputs, "demo.png"), &[])?;
+            let outputs = crate::outputs::resolve(&a.outputs, "demo.png");
+            crate::outputs::check(&with_side_outputs(&outputs, a), &[])?;
             partial_targets(a, &[])
         }
         Command::Render(s) => {
@@ -100,7 +96,7 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             let outputs = crate::outputs::resolve(&s.render.outputs, &default_output(&s.scene));
             let mut inputs = vec![s.scene.clone()];
             inputs.extend(s.render.radiosity_cache.iter().cloned());
-            crate::outputs::check(&outputs, &inputs)?;
+            crate::outputs::check(&with_side_outputs(&outputs, &s.render), &inputs)?;
             partial_targets(&s.render, &inputs)
         }
         Command::Convert(c) => crate::outputs::check(
@@ -128,6 +124,14 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             Ok(())
         }
     }
+}
+
+/// The image outputs of a render and the files written beside them (output variables as
+/// `NAME.VARIABLE.pfm`, the noisy image of `--denoise`), all checked like outputs.
+pub fn with_side_outputs(outputs: &[PathBuf], a: &RenderArgs) -> Vec<PathBuf> {
+    let written = parse_aovs(a.aov.as_deref()).unwrap_or_default();
+    let noisy = a.denoise && !a.no_keep_noisy;
+    crate::outputs::with_sides(outputs, written, noisy)
 }
 
 /// Checks the partial files a render writes (`--partial`, `--checkpoint`) like outputs: each a

@@ -132,6 +132,11 @@ pub fn run(args: MergeArgs) -> Result<()> {
             film.channels()
         );
     }
+    // The variables' files beside the images are outputs too: never one of the parts.
+    crate::outputs::check(
+        &crate::outputs::with_sides(&images, aovs, false),
+        &args.parts,
+    )?;
     let extras = Extras {
         aovs,
         written: aovs,

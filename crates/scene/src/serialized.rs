@@ -43,23 +43,23 @@ pub struct SerializedMesh {
 /// Reads mesh `index` of the serialized file at `path`. The error is a message for the user
 /// (the caller adds the position).
 ///
-/// The file is read as meshes are (a regular file of at most `limits.max_memory /`
-/// [`MESH_FILE_FRACTION`](crate::mesh::MESH_FILE_FRACTION) bytes), and the mesh it announces
-/// may decompress to at most `limits.max_memory /` [`DECODED_FRACTION`] bytes.
+/// The file is read as OBJ and PLY files are (a regular file of at most `limits.max_memory /`
+/// [`FILE_FRACTION`] bytes), and the mesh it announces may decompress to at most
+/// `limits.max_memory /` [`DECODED_FRACTION`] bytes.
 pub fn load_serialized(
     path: &Path,
     index: u32,
     limits: &candela_imageio::Limits,
 ) -> Result<SerializedMesh, String> {
     crate::inputs::record(path);
-    let bytes = candela_imageio::input::read_file(
-        path,
-        limits.max_memory / crate::mesh::MESH_FILE_FRACTION,
-    )
-    .map_err(|e| format!("cannot read serialized mesh '{}': {e}", path.display()))?;
+    let bytes = candela_imageio::input::read_file(path, limits.max_memory / FILE_FRACTION)
+        .map_err(|e| format!("cannot read serialized mesh '{}': {e}", path.display()))?;
     parse_serialized_within(&bytes, index, limits.max_memory / DECODED_FRACTION)
         .map_err(|e| format!("serialized mesh '{}': {e}", path.display()))
 }
+
+/// The share of the memory budget a serialized file may take (that of OBJ and PLY files).
+pub const FILE_FRACTION: u64 = 16;
 
 /// The share of the memory budget a serialized mesh may decompress to (its data is held about
 /// twice while it is converted).

@@ -416,6 +416,16 @@ fn generate(name: &str, dir: &Path) -> Vec<u8> {
             b
         }
         "part_a" => demo_part(dir, "0..2", &[]),
+        "part_albedo" => {
+            let o = run_candela(
+                dir,
+                "demo -q --width 4 --height 4 --spp 2 --aov albedo --partial gen.part",
+            );
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let b = fs::read(dir.join("gen.part")).unwrap();
+            fs::remove_file(dir.join("gen.part")).unwrap();
+            b
+        }
         "part_b" => demo_part(dir, "2..4", &[]),
         "part_frame_huge" => demo_part(dir, "2..4", &[("width", "30000"), ("height", "30000")]),
         "part_frame_wide" => demo_part(dir, "2..4", &[("width", "4000000000")]),
