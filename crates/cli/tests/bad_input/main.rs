@@ -455,6 +455,25 @@ fn generate(name: &str, dir: &Path) -> Vec<u8> {
         }
         "lang_unary" => format!("float x({}1)\n", "- ".repeat(100_000)).into_bytes(),
         "xml_include_bomb" => xml_include_bomb(dir),
+        // 100 000 shapes on a single line (positions must not cost the line's length each).
+        "xml_one_line" => format!(
+            "<scene version=\"3.0.0\">{}</scene>",
+            "<shape type=\"sphere\"><float name=\"radius\" value=\"0.001\"/></shape>"
+                .repeat(100_000)
+        )
+        .into_bytes(),
+        "xml_ref_chain" => {
+            // 100 000 twosided BSDFs, each referring to the one before.
+            let mut s = String::from("<scene version=\"3.0.0\"><bsdf type=\"diffuse\" id=\"b0\"/>");
+            for i in 1..100_000 {
+                s += &format!(
+                    "<bsdf type=\"twosided\" id=\"b{i}\"><ref id=\"b{}\"/></bsdf>",
+                    i - 1
+                );
+            }
+            s += "<shape type=\"sphere\"><ref id=\"b99999\"/></shape></scene>\n";
+            s.into_bytes()
+        }
         _ => panic!("unknown generator {name}"),
     }
 }

@@ -329,6 +329,18 @@ impl<'t> Loader<'t> {
                 format!("circular reference: {} refers to itself", e.describe()),
             ));
         }
+        // A chain of `<ref>`s nests plugins as deeply as elements can be nested: no deeper
+        // (the recursion's stack, and this list's linear search, stay small).
+        if self.active.len() >= xml::MAX_DEPTH {
+            return Err(self.err(
+                e.pos,
+                format!(
+                    "{} is nested more than {} plugins deep (through <ref>s; see docs/limits.md)",
+                    e.describe(),
+                    xml::MAX_DEPTH
+                ),
+            ));
+        }
         self.active.push(e.key());
         Ok(())
     }
