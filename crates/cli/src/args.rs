@@ -107,7 +107,7 @@ pub struct RenderArgs {
     pub threads: Option<u32>,
     /// Memory budget in bytes (suffixes K, M, G, T): limits image size, file sizes, texture
     /// pixels and meshes (docs/limits.md); default 2G, or half of `ulimit -v`.
-    #[arg(long, value_name = "BYTES", value_parser = crate::bytes::parse_bytes)]
+    #[arg(long, value_name = "BYTES", value_parser = crate::bytes::parse_budget)]
     pub max_memory: Option<u64>,
     /// Print rays traced, time and Mrays/s.
     #[arg(long)]
@@ -234,7 +234,7 @@ pub struct ConvertArgs {
     /// The output image (.pfm, .exr, .hdr, .png; `-` for a PNG on standard output).
     pub output: PathBuf,
     /// Memory budget in bytes (suffixes K, M, G, T), as for `render`.
-    #[arg(long, value_name = "BYTES", value_parser = crate::bytes::parse_bytes)]
+    #[arg(long, value_name = "BYTES", value_parser = crate::bytes::parse_budget)]
     pub max_memory: Option<u64>,
     /// How an LDR output is tone mapped.
     #[command(flatten)]

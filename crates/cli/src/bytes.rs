@@ -28,6 +28,32 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
     Ok(bytes)
 }
 
+/// Parses `--max-memory`: a byte count ([`parse_bytes`]) of at most half the process's
+/// address-space limit (`ulimit -v`), when there is one: a larger budget would let an
+/// allocation fail (an abort) instead of the limit's message.
+pub fn parse_budget(s: &str) -> Result<u64, String> {
+    let bytes = parse_bytes(s)?;
+    within_address_space(s, bytes, address_space_limit())
+}
+
+/// The process's address-space limit (`RLIMIT_AS`), read from `/proc/self/limits`.
+pub fn address_space_limit() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line.split_whitespace().nth(3)?.parse().ok()
+}
+
+fn within_address_space(s: &str, bytes: u64, limit: Option<u64>) -> Result<u64, String> {
+    match limit {
+        Some(limit) if bytes > limit / 2 => Err(format!(
+            "'{s}' is more than half of the address space this process may use (ulimit -v: {} MiB); at most {}M",
+            limit >> 20,
+            (limit / 2) >> 20
+        )),
+        _ => Ok(bytes),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -43,5 +69,15 @@ mod tests {
         assert!(parse_bytes("99999999999T")
             .unwrap_err()
             .contains("too large"));
+        assert_eq!(within_address_space("1G", 1 << 30, None), Ok(1 << 30));
+        assert_eq!(
+            within_address_space("1G", 1 << 30, Some(2 << 30)),
+            Ok(1 << 30)
+        );
+        let e = within_address_space("1T", 1 << 40, Some(1 << 30)).unwrap_err();
+        assert!(
+            e.contains("ulimit -v: 1024 MiB") && e.contains("at most 512M"),
+            "{e}"
+        );
     }
 }

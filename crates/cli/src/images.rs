@@ -7,8 +7,8 @@ use crate::args::ToneArgs;
 pub use crate::inputs::parse_aovs;
 use anyhow::{bail, Context, Result};
 use candela_denoise::Auxiliaries;
-use candela_imageio::exr::{read_exr_channels, write_exr_layers, AovLayer};
-use candela_imageio::{write_atomically, Encoding, Format, ToneMap};
+use candela_imageio::exr::{read_exr_channels_within, write_exr_layers, AovLayer};
+use candela_imageio::{Encoding, Format, ToneMap};
 use candela_render::aov::AovSet;
 use candela_render::film::{Film, Window};
 use candela_render::{Image, Rgb};
@@ -101,7 +101,7 @@ pub fn write_film(
             let noisy: Vec<PathBuf> = outputs
                 .iter()
                 .filter(|p| !crate::outputs::is_stdout(p))
-                .map(|p| noisy_name(p))
+                .map(|p| crate::outputs::noisy_name(p))
                 .collect();
             crate::outputs::write_all(&noisy, &beauty, tone)?;
         }
@@ -115,30 +115,53 @@ pub fn write_film(
         crate::outputs::write_all(outputs, &image, tone)?;
         return Ok(image);
     }
+    // The images and the variables' files beside them: all written or none.
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let mut stdout = Vec::new();
     for path in outputs {
-        write_one(path, &image, &layers, tone)?;
+        if crate::outputs::is_stdout(path) {
+            stdout.push(path.clone());
+        } else {
+            encode_one(path, &image, &layers, tone, &mut files)?;
+        }
     }
+    let refs: Vec<(&Path, &[u8])> = files
+        .iter()
+        .map(|(p, b)| (p.as_path(), b.as_slice()))
+        .collect();
+    candela_imageio::write_all_atomically(&refs).map_err(|(i, e)| {
+        crate::exit::Output(format!(
+            "cannot write '{}' ({}: {e}); no output was written",
+            refs[i].0.display(),
+            e.stage
+        ))
+    })?;
+    crate::outputs::write_all(&stdout, &image, tone)?;
     Ok(image)
 }
 
-/// `NAME.noisy.EXT` beside `path`.
-fn noisy_name(path: &Path) -> PathBuf {
-    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-    let ext = path.extension().unwrap_or_default().to_string_lossy();
-    path.with_file_name(format!("{stem}.noisy.{ext}"))
-}
-
-/// One output: the layers inside an OpenEXR file, or as `NAME.VARIABLE.pfm` beside others.
-fn write_one(path: &Path, image: &Image, layers: &[AovLayer], tone: &ToneMap) -> Result<()> {
+/// One output encoded into `files`: the layers inside an OpenEXR file, or as
+/// `NAME.VARIABLE.pfm` beside others.
+fn encode_one(
+    path: &Path,
+    image: &Image,
+    layers: &[AovLayer],
+    tone: &ToneMap,
+    files: &mut Vec<(PathBuf, Vec<u8>)>,
+) -> Result<()> {
     let context = || format!("writing '{}'", path.display());
-    if layers.is_empty() {
-        return candela_imageio::write_image(path, image, tone).with_context(context);
+    let format = Format::from_path(path).with_context(context)?;
+    if format == Format::Exr {
+        files.push((
+            path.to_path_buf(),
+            write_exr_layers(image, layers).with_context(context)?,
+        ));
+        return Ok(());
     }
-    if Format::from_path(path).ok() == Some(Format::Exr) {
-        let bytes = write_exr_layers(image, layers).with_context(context)?;
-        return write_atomically(path, &bytes).with_context(context);
-    }
-    candela_imageio::write_image(path, image, tone).with_context(context)?;
+    files.push((
+        path.to_path_buf(),
+        format.encode(image, tone).with_context(context)?,
+    ));
     let stem = path.file_stem().unwrap_or_default().to_string_lossy();
     for layer in layers {
         let beside = path.with_file_name(format!("{stem}.{}.pfm", layer.name));
@@ -152,8 +175,13 @@ fn write_one(path: &Path, image: &Image, layers: &[AovLayer], tone: &ToneMap) ->
                 [] => Rgb::BLACK,
             };
         }
-        candela_imageio::write_image(&beside, &img, tone)
+        if files.iter().any(|(p, _)| *p == beside) {
+            continue; // beside another output of the same name
+        }
+        let bytes = Format::Pfm
+            .encode(&img, tone)
             .with_context(|| format!("writing '{}'", beside.display()))?;
+        files.push((beside, bytes));
     }
     Ok(())
 }
@@ -204,9 +232,12 @@ pub fn denoise_command(a: DenoiseArgs) -> Result<()> {
         );
     }
     let is_exr = Format::from_path(&a.input).ok() == Some(Format::Exr);
+    // An input file as any other: a regular file within the memory budget's limits.
+    let limits = candela_imageio::Limits::from_memory(crate::inputs::max_memory(None));
     let (beauty, albedo, normal) = if is_exr {
-        let bytes = std::fs::read(&a.input).with_context(|| format!("'{}'", a.input.display()))?;
-        let (w, h, channels) = read_exr_channels(&bytes)
+        let bytes = candela_imageio::input::read_file(&a.input, limits.max_file_bytes)
+            .map_err(|e| anyhow::anyhow!("'{}': {e}", a.input.display()))?;
+        let (w, h, channels) = read_exr_channels_within(&bytes, &limits)
             .map_err(|e| anyhow::anyhow!("'{}': {e}", a.input.display()))?;
         let find = |names: [&str; 3]| -> Option<Vec<f32>> {
             let cs: Vec<&Vec<f32>> = names
@@ -231,7 +262,7 @@ pub fn denoise_command(a: DenoiseArgs) -> Result<()> {
             find(["normal.X", "normal.Y", "normal.Z"]),
         )
     } else {
-        let img = candela_imageio::read_image(&a.input)
+        let img = candela_imageio::read_image_within(&a.input, &limits)
             .map_err(|e| anyhow::anyhow!("'{}': {e}", a.input.display()))?;
         (img, None, None)
     };

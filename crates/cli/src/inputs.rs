@@ -63,12 +63,7 @@ pub fn max_memory(option: Option<u64>) -> u64 {
     })
 }
 
-/// The process's address-space limit (`RLIMIT_AS`), read from `/proc/self/limits`.
-pub fn address_space_limit() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
-    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
-    line.split_whitespace().nth(3)?.parse().ok()
-}
+pub use crate::bytes::address_space_limit;
 
 /// The limits of readers for these options.
 pub fn limits(args: &RenderArgs) -> Limits {
@@ -80,7 +75,9 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
     match command {
         Command::Demo(a) => {
             render_args(a, false)?;
-            crate::outputs::check(&crate::outputs::resolve(&a.outputs, "demo.png"), &[])
+            let outputs = crate::outputs::resolve(&a.outputs, "demo.png");
+            crate::outputs::check(&with_side_outputs(&outputs, a), &[])?;
+            partial_targets(a, &[])
         }
         Command::Render(s) => {
             let stdin = is_stdin(&s.scene);
@@ -113,7 +110,8 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             let outputs = crate::outputs::resolve(&s.render.outputs, &default_output(&s.scene));
             let mut inputs = vec![scene];
             inputs.extend(s.render.radiosity_cache.iter().cloned());
-            crate::outputs::check(&outputs, &inputs)
+            crate::outputs::check(&with_side_outputs(&outputs, &s.render), &inputs)?;
+            partial_targets(&s.render, &inputs)
         }
         Command::Convert(c) => crate::outputs::check(
             std::slice::from_ref(&c.output),
@@ -124,14 +122,20 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
             std::slice::from_ref(&d.input),
         ),
         Command::Merge(m) => {
-            // Image outputs as any other; partial-file outputs are checked by `merge`.
-            let images: Vec<PathBuf> = m
+            // Image outputs as any other; partial-file outputs (their extensions are checked
+            // by `merge`) must be usable targets too, so that nothing is written when one is not.
+            let (images, partials): (Vec<PathBuf>, Vec<PathBuf>) = m
                 .outputs
                 .iter()
-                .filter(|o| candela_imageio::supported_extension(o))
                 .cloned()
-                .collect();
-            crate::outputs::check(&images, &m.parts)
+                .partition(|o| candela_imageio::supported_extension(o));
+            crate::outputs::check(&images, &m.parts)?;
+            for p in &partials {
+                if !crate::outputs::is_stdout(p) {
+                    crate::outputs::check_partial_target("--output", p, &images, &[])?;
+                }
+            }
+            Ok(())
         }
     }
 }
@@ -139,6 +143,28 @@ pub fn validate(command: &Command) -> Result<(), Usage> {
 /// True when the scene argument is `-`: the scene is read from standard input.
 pub fn is_stdin(scene: &Path) -> bool {
     scene.as_os_str() == "-"
+}
+
+/// The image outputs of a render and the files written beside them (output variables as
+/// `NAME.VARIABLE.pfm`, the noisy image of `--denoise`), all checked like outputs.
+pub fn with_side_outputs(outputs: &[PathBuf], a: &RenderArgs) -> Vec<PathBuf> {
+    let written = parse_aovs(a.aov.as_deref()).unwrap_or_default();
+    let noisy = a.denoise && !a.no_keep_noisy;
+    crate::outputs::with_sides(outputs, written, noisy)
+}
+
+/// Checks the partial files a render writes (`--partial`, `--checkpoint`) like outputs: each a
+/// regular file or nothing, neither an image output nor an input, not the same file twice.
+fn partial_targets(a: &RenderArgs, inputs: &[PathBuf]) -> Result<(), Usage> {
+    if let Some(p) = &a.partial {
+        crate::outputs::check_partial_target("--partial", p, &a.outputs, inputs)?;
+    }
+    if let Some(c) = &a.checkpoint {
+        let mut others = a.outputs.clone();
+        others.extend(a.partial.iter().cloned());
+        crate::outputs::check_partial_target("--checkpoint", c, &others, inputs)?;
+    }
+    Ok(())
 }
 
 /// The default output of `render SCENE`: the scene's name with `.png`, in the current folder

@@ -81,6 +81,15 @@ pub fn run(args: MergeArgs) -> Result<()> {
     }
 
     let (width, height) = (first.film.width(), first.film.height());
+    // The whole frame is allocated: refused, naming the file, when over the memory budget.
+    let budget = crate::inputs::max_memory(None);
+    if crate::inputs::render_memory(width, height, first.film.channels() as u64, budget).is_err() {
+        bail!(
+            "'{}': its {width}×{height} frame is more than the memory budget ({} MB) can merge (docs/limits.md)",
+            first_path.display(),
+            budget >> 20
+        );
+    }
     let spp = first.meta.spp;
     let full = Window::full(width, height);
     let mut film = Film::new(width, height, full, first.film.channels());
@@ -123,6 +132,11 @@ pub fn run(args: MergeArgs) -> Result<()> {
             film.channels()
         );
     }
+    // The variables' files beside the images are outputs too: never one of the parts.
+    crate::outputs::check(
+        &crate::outputs::with_sides(&images, aovs, false),
+        &args.parts,
+    )?;
     let extras = Extras {
         aovs,
         written: aovs,

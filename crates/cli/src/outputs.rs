@@ -6,6 +6,7 @@
 use crate::exit::{Output, Usage};
 use anyhow::Result;
 use candela_imageio::{Format, ToneMap};
+use candela_render::aov::AovSet;
 use candela_render::Image;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -88,6 +89,77 @@ pub fn not_inputs(outputs: &[PathBuf], inputs: &[PathBuf]) -> Result<(), Usage> 
         }
     }
     Ok(())
+}
+
+/// Checks a partial file a render writes (`--partial`, `--checkpoint`, given as `option`)
+/// before any work, as an output: a regular file or nothing in an existing folder, not one of
+/// the image `outputs`, not one of `inputs`.
+pub fn check_partial_target(
+    option: &str,
+    path: &Path,
+    outputs: &[PathBuf],
+    inputs: &[PathBuf],
+) -> Result<(), Usage> {
+    candela_imageio::check_target(path)
+        .map_err(|e| Usage(format!("{option} '{}': {e}", path.display())))?;
+    if let Some(o) = outputs.iter().find(|o| *o == path || same_file(o, path)) {
+        return Err(Usage(format!(
+            "{option} '{}' is also given as --output '{}'",
+            path.display(),
+            o.display()
+        )));
+    }
+    if let Some(i) = inputs.iter().find(|i| *i == path || same_file(i, path)) {
+        return Err(Usage(format!(
+            "{option} '{}' is an input of this run ('{}'): refusing to overwrite it",
+            path.display(),
+            i.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The files beside `path` that hold the output variables `written` (`NAME.VARIABLE.pfm`,
+/// except in an OpenEXR output, which holds them as layers) and, with `noisy`, the image
+/// before denoising (`NAME.noisy.EXT`): checked like outputs before any work.
+pub fn side_outputs(path: &Path, written: AovSet, noisy: bool) -> Vec<PathBuf> {
+    if is_stdout(path) {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    if noisy {
+        out.push(noisy_name(path));
+    }
+    if Format::from_path(path).ok() != Some(Format::Exr) {
+        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+        for aov in written.iter() {
+            out.push(path.with_file_name(format!("{stem}.{}.pfm", aov.name())));
+        }
+    }
+    out
+}
+
+/// `outputs` and the files beside them ([`side_outputs`]), each named once.
+pub fn with_sides(outputs: &[PathBuf], written: AovSet, noisy: bool) -> Vec<PathBuf> {
+    let mut all = outputs.to_vec();
+    let mut sides: Vec<PathBuf> = Vec::new();
+    for o in outputs {
+        for side in side_outputs(o, written, noisy) {
+            // `-o a.png -o a.pfm` both have `a.albedo.pfm` beside them: the same file.
+            if !sides.contains(&side) {
+                sides.push(side);
+            }
+        }
+    }
+    all.extend(sides);
+    all
+}
+
+/// `NAME.noisy.EXT` beside `path`.
+pub fn noisy_name(path: &Path) -> PathBuf {
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let ext = path.extension().unwrap_or_default().to_string_lossy();
+    path.with_file_name(format!("{stem}.noisy.{ext}"))
 }
 
 /// True when `a` and `b` name the same existing file.

@@ -318,7 +318,19 @@ fn render_frame(
     for w in &loaded.warnings {
         eprintln!("candela: warning: {w}");
     }
-    crate::outputs::not_inputs(&paths.outputs, &loaded.inputs)?;
+    crate::outputs::not_inputs(
+        &crate::inputs::with_side_outputs(&paths.outputs, args),
+        &loaded.inputs,
+    )?;
+    for (option, path) in [
+        ("--partial", &paths.partial),
+        ("--checkpoint", &paths.checkpoint),
+        ("--radiosity-cache", &args.radiosity_cache),
+    ] {
+        if let Some(p) = path {
+            crate::outputs::check_partial_target(option, p, &[], &loaded.inputs)?;
+        }
+    }
     let hints = &loaded.hints;
     let name = args
         .integrator
@@ -399,6 +411,10 @@ fn render_frame(
                 PathBuf::from(name)
             })
         });
+    if let (Some(c), None, None) = (&checkpoint, &paths.checkpoint, &paths.resume) {
+        // The checkpoint --time-limit saves beside the first output.
+        crate::outputs::check_partial_target("--time-limit's checkpoint", c, &[], &loaded.inputs)?;
+    }
     let needs_identity = paths.partial.is_some() || checkpoint.is_some();
     let meta = if needs_identity {
         let scene =

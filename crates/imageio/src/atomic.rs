@@ -26,8 +26,9 @@ impl fmt::Display for AtomicWriteError {
 }
 
 impl std::error::Error for AtomicWriteError {
+    // Transparent: the message is the cause's, so the cause is not listed again.
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        Some(&self.source)
+        self.source.source()
     }
 }
 

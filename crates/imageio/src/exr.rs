@@ -30,6 +30,13 @@ pub fn read_exr(bytes: &[u8]) -> Result<Image, ImageError> {
 /// Decodes an OpenEXR file held in memory, refusing (from its headers, before any pixel is
 /// decoded) a file whose layers hold more than `limits` allow.
 pub fn read_exr_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageError> {
+    check_exr_limits(bytes, limits)?;
+    read_checked_exr(bytes)
+}
+
+/// Fails, from the headers, when the layers of the OpenEXR file `bytes` hold more than
+/// `limits` allow to decode.
+fn check_exr_limits(bytes: &[u8], limits: &Limits) -> Result<(), ImageError> {
     let meta =
         ::exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(|cause| {
             ImageError::Exr {
@@ -55,6 +62,11 @@ pub fn read_exr_within(bytes: &[u8], limits: &Limits) -> Result<Image, ImageErro
             ),
         });
     }
+    Ok(())
+}
+
+/// Decodes an OpenEXR file whose size was checked.
+fn read_checked_exr(bytes: &[u8]) -> Result<Image, ImageError> {
     let decoded = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -150,6 +162,16 @@ pub fn write_exr_layers(img: &Image, layers: &[AovLayer]) -> Result<Vec<u8>, Ima
 
 /// Channels by name, one value per pixel each.
 pub type NamedChannels = Vec<(String, Vec<f32>)>;
+
+/// [`read_exr_channels`] within `limits`, checked from the headers before any pixel is
+/// decoded.
+pub fn read_exr_channels_within(
+    bytes: &[u8],
+    limits: &Limits,
+) -> Result<(usize, usize, NamedChannels), ImageError> {
+    check_exr_limits(bytes, limits)?;
+    read_exr_channels(bytes)
+}
 
 /// Every full-resolution channel of the first layer of an OpenEXR file, by name, as f32, with
 /// the layer's size.

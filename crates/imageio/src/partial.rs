@@ -138,6 +138,13 @@ pub fn decode_partial(bytes: &[u8]) -> Result<Partial, String> {
         ));
     }
     let (width, height, channels) = (num("width")?, num("height")?, num("channels")?);
+    for (key, side) in [("width", width), ("height", height)] {
+        if !(1..=MAX_FRAME_SIDE).contains(&side) {
+            return Err(format!(
+                "header '{key}={side}' is out of range (1 … {MAX_FRAME_SIDE})"
+            ));
+        }
+    }
     if !(1..=64).contains(&channels) {
         return Err(format!("header 'channels={channels}' is out of range"));
     }
@@ -217,6 +224,9 @@ pub fn decode_partial(bytes: &[u8]) -> Result<Partial, String> {
         film,
     })
 }
+
+/// The largest frame side a partial file may hold (the renderer's image limit).
+pub const MAX_FRAME_SIDE: usize = 1 << 15;
 
 /// Header values stay on one line.
 fn clean(s: &str) -> String {

@@ -42,13 +42,28 @@ pub struct SerializedMesh {
 
 /// Reads mesh `index` of the serialized file at `path`. The error is a message for the user
 /// (the caller adds the position).
-pub fn load_serialized(path: &Path, index: u32) -> Result<SerializedMesh, String> {
+///
+/// The file is read as OBJ and PLY files are (a regular file of at most `limits.max_memory /`
+/// [`FILE_FRACTION`] bytes), and the mesh it announces may decompress to at most
+/// `limits.max_memory /` [`DECODED_FRACTION`] bytes.
+pub fn load_serialized(
+    path: &Path,
+    index: u32,
+    limits: &candela_imageio::Limits,
+) -> Result<SerializedMesh, String> {
     crate::inputs::record(path);
-    let bytes = std::fs::read(path)
+    let bytes = candela_imageio::input::read_file(path, limits.max_memory / FILE_FRACTION)
         .map_err(|e| format!("cannot read serialized mesh '{}': {e}", path.display()))?;
-    parse_serialized(&bytes, index)
+    parse_serialized_within(&bytes, index, limits.max_memory / DECODED_FRACTION)
         .map_err(|e| format!("serialized mesh '{}': {e}", path.display()))
 }
+
+/// The share of the memory budget a serialized file may take (that of OBJ and PLY files).
+pub const FILE_FRACTION: u64 = 16;
+
+/// The share of the memory budget a serialized mesh may decompress to (its data is held about
+/// twice while it is converted).
+pub const DECODED_FRACTION: u64 = 8;
 
 fn u16_at(b: &[u8], at: usize) -> Option<u16> {
     Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?))
@@ -62,6 +77,16 @@ fn u64_at(b: &[u8], at: usize) -> Option<u64> {
 
 /// Parses mesh `index` of the serialized file `bytes`.
 pub fn parse_serialized(bytes: &[u8], index: u32) -> Result<SerializedMesh, String> {
+    parse_serialized_within(bytes, index, u64::MAX)
+}
+
+/// Parses mesh `index` of the serialized file `bytes`, refusing a mesh whose data takes more
+/// than `max_decoded` bytes once decompressed.
+pub fn parse_serialized_within(
+    bytes: &[u8],
+    index: u32,
+    max_decoded: u64,
+) -> Result<SerializedMesh, String> {
     let bad = |what: &str| what.to_string();
     let (Some(format), Some(version)) = (u16_at(bytes, 0), u16_at(bytes, 2)) else {
         return Err(bad("the file is too short"));
@@ -146,6 +171,12 @@ pub fn parse_serialized(bytes: &[u8], index: u32) -> Result<SerializedMesh, Stri
     if need.is_none_or(|n| n > limit) || vertices > u32::MAX as u64 {
         return Err(format!(
             "{vertices} vertices and {triangles} triangles do not fit in the file"
+        ));
+    }
+    if need.is_some_and(|n| n > max_decoded) {
+        return Err(format!(
+            "{vertices} vertices and {triangles} triangles take more than {} MB, the share of --max-memory a serialized mesh may use (docs/limits.md)",
+            max_decoded >> 20
         ));
     }
     let vertices = vertices as usize;
@@ -305,6 +336,10 @@ mod tests {
         let mut wrong = good.clone();
         wrong[0] = 0;
         assert!(parse_serialized(&wrong, 0).is_err());
+        // A mesh over the decoding budget is refused before its data is allocated.
+        let e = parse_serialized_within(&good, 0, 16).unwrap_err();
+        assert!(e.contains("--max-memory"), "{e}");
+        assert!(parse_serialized_within(&good, 0, 1 << 20).is_ok());
         // Every truncation and a few corruptions: never a panic.
         for n in 0..good.len() {
             let _ = parse_serialized(&good[..n], 0);

@@ -228,6 +228,98 @@ fn lang_deep(n: usize) -> Vec<u8> {
 /// A radiosity scene with a point light (solved in a moment).
 const RADIOSITY_SCENE: &str = "material m(diffuse(<0.5, 0.5, 0.5>))\nbox(m, identity)\npoint_light([0, 0, 0.5], <1, 1, 1>, 0)\ncamera(perspective, translation([-0.5, 0, 0]), 1, 1)\n";
 
+/// A zlib stream holding `data` in stored (uncompressed) blocks.
+fn zlib_stored(data: &[u8]) -> Vec<u8> {
+    let mut out = vec![0x78, 0x01];
+    let mut chunks = data.chunks(0xffff).peekable();
+    if chunks.peek().is_none() {
+        out.extend([1, 0, 0, 0xff, 0xff]);
+    }
+    while let Some(c) = chunks.next() {
+        out.push(u8::from(chunks.peek().is_none()));
+        out.extend((c.len() as u16).to_le_bytes());
+        out.extend((!(c.len() as u16)).to_le_bytes());
+        out.extend(c);
+    }
+    let (mut a, mut b) = (1u32, 0u32);
+    for &x in data {
+        a = (a + x as u32) % 65521;
+        b = (b + a) % 65521;
+    }
+    out.extend(((b << 16) | a).to_be_bytes());
+    out
+}
+
+/// A Mitsuba serialized file (format 4, single precision) of `vertices` and `triangles` with
+/// the data `data`, then `pad` zero bytes.
+fn serialized(vertices: u64, triangles: u64, data: &[u8], pad: usize) -> Vec<u8> {
+    let mut body = 0x1000u32.to_le_bytes().to_vec();
+    body.push(0);
+    body.extend(vertices.to_le_bytes());
+    body.extend(triangles.to_le_bytes());
+    body.extend(data);
+    let mut out = vec![0x1c, 0x04, 4, 0];
+    out.extend(zlib_stored(&body));
+    out.resize(out.len() + pad, 0);
+    out
+}
+
+/// The data of one triangle with vertices `p` and indices `i`.
+fn triangle_data(p: [f32; 9], i: [u32; 3]) -> Vec<u8> {
+    let mut out: Vec<u8> = p.iter().flat_map(|v| v.to_le_bytes()).collect();
+    out.extend(i.iter().flat_map(|v| v.to_le_bytes()));
+    out
+}
+
+/// A partial file of the demo (4×4, 4 spp) holding samples `samples`, its header values
+/// replaced by `edits` (the checksum made right again).
+fn demo_part(dir: &Path, samples: &str, edits: &[(&str, &str)]) -> Vec<u8> {
+    let o = run_candela(
+        dir,
+        &format!("demo -q --width 4 --height 4 --spp 4 --samples {samples} --partial gen.part"),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut b = fs::read(dir.join("gen.part")).unwrap();
+    fs::remove_file(dir.join("gen.part")).unwrap();
+    for (key, value) in edits {
+        let line = format!("\n{key}=");
+        let at = b
+            .windows(line.len())
+            .position(|w| w == line.as_bytes())
+            .unwrap()
+            + line.len();
+        let end = at + b[at..].iter().position(|&c| c == b'\n').unwrap();
+        b.splice(at..end, value.bytes());
+    }
+    let n = b.len() - 8;
+    let h = fnv(&b[..n]);
+    b[n..].copy_from_slice(&h.to_le_bytes());
+    b
+}
+
+/// A Mitsuba scene whose `<include>`s multiply: 10 of a file that includes 10 of the next, 7
+/// levels (10⁷ spheres if nothing stopped it); the included files are written into `dir`.
+fn xml_include_bomb(dir: &Path) -> Vec<u8> {
+    let level = |next: &str| {
+        format!(
+            "<scene version=\"3.0.0\">{}</scene>\n",
+            format!("<include filename=\"{next}\"/>").repeat(10)
+        )
+    };
+    let names = [
+        "a.xml", "b.xml", "c.xml", "d.xml", "e.xml", "f.xml", "g.xml",
+    ];
+    for w in names.windows(2) {
+        fs::write(dir.join(w[0]), level(w[1])).unwrap();
+    }
+    fs::write(
+        dir.join("g.xml"),
+        "<scene version=\"3.0.0\"><shape type=\"sphere\"/></scene>\n",
+    )
+    .unwrap();
+    level("a.xml").into_bytes()
+}
+
 fn run_candela(dir: &Path, args: &str) -> std::process::Output {
     Command::new("sh")
         .arg("-c")
@@ -298,6 +390,93 @@ fn generate(name: &str, dir: &Path) -> Vec<u8> {
         }
         "radiosity_scene" => RADIOSITY_SCENE.as_bytes().to_vec(),
         "big_text" => vec![b'#'; 3 << 20],
+        "pfm_one" => pfm(1, 1, &[0.5; 3]),
+        "pfm_max" => pfm(2, 1, &[f32::MAX; 6]),
+        "ser_ok" => serialized(
+            3,
+            1,
+            &triangle_data([0., 0., 0., 1., 0., 0., 0., 1., 0.], [0, 1, 2]),
+            0,
+        ),
+        "ser_index_out_of_range" => serialized(
+            3,
+            1,
+            &triangle_data([0., 0., 0., 1., 0., 0., 0., 1., 0.], [0, 1, 7]),
+            0,
+        ),
+        "ser_nan" => serialized(
+            3,
+            1,
+            &triangle_data([f32::NAN, 0., 0., 1., 0., 0., 0., 1., 0.], [0, 1, 2]),
+            0,
+        ),
+        // Counts whose data would take 1 GB, in a file large enough for deflate to hold them.
+        "ser_bomb_vertices" => serialized(90_000_000, 0, &[], 2_000_000),
+        "ser_bomb_triangles" => serialized(0, 90_000_000, &[], 2_000_000),
+        "ser_truncated" => {
+            let mut b = serialized(3, 1, &[0; 48], 0);
+            b.truncate(24);
+            b
+        }
+        "part_a" => demo_part(dir, "0..2", &[]),
+        "part_albedo" => {
+            let o = run_candela(
+                dir,
+                "demo -q --width 4 --height 4 --spp 2 --aov albedo --partial gen.part",
+            );
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let b = fs::read(dir.join("gen.part")).unwrap();
+            fs::remove_file(dir.join("gen.part")).unwrap();
+            b
+        }
+        "part_b" => demo_part(dir, "2..4", &[]),
+        "part_frame_huge" => demo_part(dir, "2..4", &[("width", "30000"), ("height", "30000")]),
+        "part_frame_wide" => demo_part(dir, "2..4", &[("width", "4000000000")]),
+        "part_channels_huge" => demo_part(dir, "2..4", &[("channels", "4000000000")]),
+        "part_window_huge" => demo_part(dir, "2..4", &[("window", "0,4294967295,0,4294967295")]),
+        "part_truncated" => {
+            let mut b = demo_part(dir, "2..4", &[]);
+            b.truncate(b.len() / 2);
+            b
+        }
+        "part_bit_flipped" => {
+            let mut b = demo_part(dir, "2..4", &[]);
+            let n = b.len() - 20;
+            b[n] ^= 1;
+            b
+        }
+        "polyhedron_repeated" => {
+            let mut s =
+                String::from("material m(diffuse(<0.5, 0.5, 0.5>))\npolyhedron(m, identity");
+            s += &", [1, 0, 0], 1".repeat(3000);
+            s += ", [-1, 0, 0], 1, [0, 1, 0], 1, [0, -1, 0], 1, [0, 0, 1], 1, [0, 0, -1], 1)\n";
+            s += "camera(perspective, translation([-4, 0, 0]), 1, 1)\n";
+            s.into_bytes()
+        }
+        "lang_parens" => {
+            format!("float x({}1{})\n", "(".repeat(100_000), ")".repeat(100_000)).into_bytes()
+        }
+        "lang_unary" => format!("float x({}1)\n", "- ".repeat(100_000)).into_bytes(),
+        "xml_include_bomb" => xml_include_bomb(dir),
+        // 100 000 shapes on a single line (positions must not cost the line's length each).
+        "xml_one_line" => format!(
+            "<scene version=\"3.0.0\">{}</scene>",
+            "<shape type=\"sphere\"><float name=\"radius\" value=\"0.001\"/></shape>"
+                .repeat(100_000)
+        )
+        .into_bytes(),
+        "xml_ref_chain" => {
+            // 100 000 twosided BSDFs, each referring to the one before.
+            let mut s = String::from("<scene version=\"3.0.0\"><bsdf type=\"diffuse\" id=\"b0\"/>");
+            for i in 1..100_000 {
+                s += &format!(
+                    "<bsdf type=\"twosided\" id=\"b{i}\"><ref id=\"b{}\"/></bsdf>",
+                    i - 1
+                );
+            }
+            s += "<shape type=\"sphere\"><ref id=\"b99999\"/></shape></scene>\n";
+            s.into_bytes()
+        }
         _ => panic!("unknown generator {name}"),
     }
 }

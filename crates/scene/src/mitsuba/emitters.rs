@@ -87,7 +87,7 @@ impl<'t> Loader<'t> {
                 let (m, _) = self.to_world(&p)?;
                 let (name, pos) = p.get::<String>("filename")?.ok_or_else(|| p.error(e.pos, "envmap needs a 'filename'"))?;
                 let mut image = self.image(&name, false, pos)?;
-                let scale = p.or("scale", 1.0f32)?;
+                let scale = p.number_in("scale", 1.0, (0.0, f32::MAX as f64))? as f32;
                 if scale != 1.0 {
                     let mut scaled = (*image).clone();
                     for px in scaled.pixels_mut() {

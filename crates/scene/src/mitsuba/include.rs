@@ -18,6 +18,10 @@ use std::path::{Path, PathBuf};
 /// The deepest chain of nested includes accepted (Mitsuba's limit is 15).
 pub const MAX_INCLUDE_DEPTH: usize = 15;
 
+/// The most `<include>`s expanded in one scene, each inclusion of a file counted (a file
+/// included twice by each of several levels multiplies).
+pub const MAX_INCLUSIONS: usize = 4096;
+
 /// The files of one Mitsuba scene: the main file, then every included file with the first
 /// virtual line before its own lines.
 #[derive(Debug)]
@@ -108,6 +112,13 @@ pub(super) struct Expander<'a> {
     pub defines: &'a [(String, String)],
     /// The command-line definitions no file has used yet.
     pub unused: Vec<String>,
+    /// The limits files are read within.
+    pub limits: &'a candela_imageio::Limits,
+    /// Inclusions expanded so far.
+    pub inclusions: usize,
+    /// Bytes of included files read so far (each inclusion counted): at most
+    /// `limits.max_file_bytes` in all, as for one scene file.
+    pub included_bytes: u64,
 }
 
 impl Expander<'_> {
@@ -202,14 +213,36 @@ impl Expander<'_> {
                 format!("<include>s are nested more than {MAX_INCLUDE_DEPTH} deep"),
             ));
         }
+        self.inclusions += 1;
+        if self.inclusions > MAX_INCLUSIONS {
+            return Err(err(
+                self.sources,
+                inc.pos,
+                format!("more than {MAX_INCLUSIONS} <include>s are expanded (each inclusion of a file counts; see docs/limits.md)"),
+            ));
+        }
         crate::inputs::record(&path);
-        let text = std::fs::read_to_string(&path).map_err(|e| {
+        let budget = self
+            .limits
+            .max_file_bytes
+            .saturating_sub(self.included_bytes);
+        let bytes = candela_imageio::input::read_file(&path, budget).map_err(|e| {
             err(
                 self.sources,
                 name.pos,
-                format!("cannot read the included file '{}': {e}", path.display()),
+                format!(
+                    "cannot read the included file '{}': {e}{}",
+                    path.display(),
+                    if budget < self.limits.max_file_bytes {
+                        " (the included files together, each inclusion counted, may not exceed the limit)"
+                    } else {
+                        ""
+                    }
+                ),
             )
         })?;
+        self.included_bytes += bytes.len() as u64;
+        let text = String::from_utf8(bytes).map_err(|e| SceneError::invalid_utf8(&path, &e))?;
         let src = SourceFile::new(&path, text);
         let (mut root, unused) = xml::parse(&src, self.defines)?;
         self.unused.retain(|d| unused.contains(d));

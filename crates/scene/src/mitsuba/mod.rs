@@ -101,6 +101,9 @@ pub fn load_mitsuba(
             sources: &mut sources,
             defines: &opts.defines,
             unused,
+            limits: &opts.limits,
+            inclusions: 0,
+            included_bytes: 0,
         };
         let mut stack = vec![path.canonicalize().unwrap_or_else(|_| path.to_path_buf())];
         ex.expand(&mut root, path, &mut stack)?;
@@ -326,6 +329,18 @@ impl<'t> Loader<'t> {
                 format!("circular reference: {} refers to itself", e.describe()),
             ));
         }
+        // A chain of `<ref>`s nests plugins as deeply as elements can be nested: no deeper
+        // (the recursion's stack, and this list's linear search, stay small).
+        if self.active.len() >= xml::MAX_DEPTH {
+            return Err(self.err(
+                e.pos,
+                format!(
+                    "{} is nested more than {} plugins deep (through <ref>s; see docs/limits.md)",
+                    e.describe(),
+                    xml::MAX_DEPTH
+                ),
+            ));
+        }
         self.active.push(e.key());
         Ok(())
     }
@@ -392,25 +407,45 @@ impl<'t> Loader<'t> {
         let Some(i) = p.item(name) else {
             return Ok((Rgb::splat(default), None));
         };
-        let spectrum = |s: Spectrum| match s {
-            // A flat reflectance is its grey in both modes (its upsampled spectrum is flat).
-            Spectrum::Constant(c) if role != RgbRole::Emission => Ok((Rgb::splat(c), None)),
-            s => Ok((s.to_rgb(role), Some(Arc::new(s)))),
+        // Never negative, like the colours below: at the samples of a tabulated spectrum,
+        // every 5 nm of the visible range for the others.
+        let spectrum = |s: Spectrum| {
+            let negative = match &s {
+                Spectrum::Tabulated(t) => t.samples().iter().any(|&(_, v)| v < 0.0),
+                s => (360..=830).step_by(5).any(|l| s.eval(l as f32) < 0.0),
+            };
+            if negative {
+                return Err(format!("'{name}' must not be negative"));
+            }
+            Ok(match s {
+                // A flat reflectance is its grey in both modes (its upsampled spectrum is flat).
+                Spectrum::Constant(c) if role != RgbRole::Emission => (Rgb::splat(c), None),
+                s => (s.to_rgb(role), Some(Arc::new(s))),
+            })
         };
-        match i.value {
-            props::Value::Float(v) => Ok((Rgb::splat(v as f32), None)),
-            props::Value::Int(v) => Ok((Rgb::splat(v as f32), None)),
+        // Colours are reflectances, radiances, intensities or indices: never negative.
+        let plain = |c: Rgb| {
+            if c.r < 0.0 || c.g < 0.0 || c.b < 0.0 {
+                Err(format!(
+                    "'{name}' must not be negative (found {} {} {})",
+                    c.r, c.g, c.b
+                ))
+            } else {
+                Ok((c, None))
+            }
+        };
+        let checked = match i.value {
+            props::Value::Float(v) => plain(Rgb::splat(v as f32)),
+            props::Value::Int(v) => plain(Rgb::splat(v as f32)),
             props::Value::Spectrum(ref s) => spectrum(s.clone()),
             props::Value::SpectrumFile(f, pos) => spectrum(self.spectrum_file(f, pos)?),
-            props::Value::Rgb([r, g, b]) => Ok((Rgb::new(r as f32, g as f32, b as f32), None)),
-            ref v => Err(self.err(
-                i.pos,
-                format!(
-                    "'{name}' must be a colour (<rgb>, <spectrum> or <float>), not {}",
-                    v.describe()
-                ),
+            props::Value::Rgb([r, g, b]) => plain(Rgb::new(r as f32, g as f32, b as f32)),
+            ref v => Err(format!(
+                "'{name}' must be a colour (<rgb>, <spectrum> or <float>), not {}",
+                v.describe()
             )),
-        }
+        };
+        checked.map_err(|m| self.err(i.pos, m))
     }
 
     /// The tabulated spectrum in the file `name` (`λ value` lines, `#` comments).

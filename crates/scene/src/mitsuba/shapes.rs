@@ -280,7 +280,7 @@ impl<'t> Loader<'t> {
                     Some(m) => m.clone(),
                     None => {
                         let m = if kind == "serialized" {
-                            let s = crate::serialized::load_serialized(&path, index).map_err(|msg| self.err(pos, msg))?;
+                            let s = crate::serialized::load_serialized(&path, index, &self.limits).map_err(|msg| self.err(pos, msg))?;
                             let mut m = s.mesh;
                             let face_normals = s.flags & crate::serialized::FACE_NORMALS != 0;
                             if face_normals {

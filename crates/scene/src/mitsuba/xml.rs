@@ -70,6 +70,10 @@ impl Element {
 struct LineIndex<'a> {
     text: &'a str,
     starts: Vec<usize>,
+    /// The last position asked for (byte, column): columns further along its line are counted
+    /// from there, so that the positions of a document in order take linear time even when it
+    /// is all on one line.
+    last: std::cell::Cell<(usize, usize)>,
 }
 
 impl<'a> LineIndex<'a> {
@@ -77,17 +81,25 @@ impl<'a> LineIndex<'a> {
         let starts = std::iter::once(0)
             .chain(text.match_indices('\n').map(|(i, _)| i + 1))
             .collect();
-        Self { text, starts }
+        Self {
+            text,
+            starts,
+            last: std::cell::Cell::new((0, 1)),
+        }
     }
 
     fn pos(&self, byte: usize) -> Pos {
         let byte = byte.min(self.text.len());
         let line = self.starts.partition_point(|&s| s <= byte).max(1);
         let start = self.starts[line - 1];
-        let col = self
-            .text
-            .get(start..byte)
-            .map_or(1, |s| s.chars().count() + 1);
+        let count = |from: usize| self.text.get(from..byte).map(|s| s.chars().count());
+        let col = match self.last.get() {
+            (b, c) if (start..=byte).contains(&b) => count(b).map(|n| c + n),
+            _ => None,
+        }
+        .or_else(|| count(start).map(|n| n + 1))
+        .unwrap_or(1);
+        self.last.set((byte, col));
         Pos::new(line as u32, col as u32)
     }
 }
@@ -283,5 +295,21 @@ mod tests {
         assert_eq!(l.pos(7), Pos::new(2, 4));
         assert_eq!(l.pos(8), Pos::new(3, 1));
         assert_eq!(l.pos(100), Pos::new(3, 2));
+        // Out of order, and on the line counted last.
+        assert_eq!(l.pos(4), Pos::new(2, 2));
+        assert_eq!(l.pos(5), Pos::new(2, 3));
+        assert_eq!(l.pos(7), Pos::new(2, 4));
+        assert_eq!(l.pos(3), Pos::new(2, 1));
+    }
+
+    #[test]
+    fn positions_on_one_long_line_take_linear_time() {
+        let text = "<a/>".repeat(200_000);
+        let l = LineIndex::new(&text);
+        let start = std::time::Instant::now();
+        for i in 0..200_000 {
+            assert_eq!(l.pos(4 * i), Pos::new(1, 4 * i as u32 + 1));
+        }
+        assert!(start.elapsed().as_secs_f64() < 1.0, "{:?}", start.elapsed());
     }
 }

@@ -86,8 +86,10 @@ pub(crate) fn scene_scale(scene: &Scene) -> (Bounds3, f32) {
     }
 }
 
-/// The most root elements the patch size may ask for (it is raised beyond).
-const MAX_ROOTS: usize = 250_000;
+/// The most root elements the patch size may ask for (it is raised beyond, with a warning):
+/// form factors take time growing faster than the patch count, so a tiny `--patch-size` must
+/// not ask for hours of work (docs/limits.md).
+const MAX_ROOTS: usize = 16_384;
 
 /// The total area of the scene's bounded surfaces (planes have a fixed number of patches).
 fn total_area(scene: &Scene) -> f32 {

@@ -469,10 +469,18 @@ impl<'s> Parser<'s> {
                         )
                     })?,
                 },
-                Filter::Mitchell { .. } if name == "mitchell" && p.more(a)? => Filter::Mitchell {
-                    b: p.arg(a, Self::number)?,
-                    c: p.arg(a, Self::number)?,
-                },
+                Filter::Mitchell { .. } if name == "mitchell" && p.more(a)? => {
+                    let coefficient = |p: &mut Self| {
+                        p.checked_number(
+                            |x| (-100.0..=100.0).contains(&x),
+                            "B and C must be in [-100, 100]",
+                        )
+                    };
+                    Filter::Mitchell {
+                        b: p.arg(a, coefficient)?,
+                        c: p.arg(a, coefficient)?,
+                    }
+                }
                 Filter::Lanczos { .. } if p.more(a)? => Filter::Lanczos {
                     lobes: p.arg(a, |p| {
                         p.checked_number(

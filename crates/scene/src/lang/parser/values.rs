@@ -158,8 +158,16 @@ impl Parser<'_> {
         Ok(v)
     }
 
+    /// `<r, g, b>`: a reflectance, a radiance or an intensity, never negative.
     pub(super) fn color(&mut self) -> PResult<Rgb> {
+        let pos = self.tok.pos;
         let [r, g, b] = self.triple('<', '>', "a colour '<r, g, b>'")?;
+        if r < 0.0 || g < 0.0 || b < 0.0 {
+            return Err(self.error(
+                pos,
+                format!("a colour must not be negative (found <{r}, {g}, {b}>)"),
+            ));
+        }
         Ok(Rgb::new(r, g, b))
     }
 
