@@ -459,6 +459,8 @@ fn render_frame(
     let built = kind
         .build(&loaded.scene, &integrator_settings)
         .map_err(|e| anyhow::anyhow!("--integrator '{name}': {e}"))?;
+    // From here on an interruption is handled by the render loop (it saves what it has).
+    session::NOTHING_TO_SAVE.store(false, std::sync::atomic::Ordering::SeqCst);
     if let Some(outcome) = &built.radiosity {
         radiosity_outcome(outcome, args)?;
     }

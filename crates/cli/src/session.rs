@@ -16,13 +16,24 @@ use std::time::Instant;
 /// Set by SIGINT and SIGTERM.
 pub static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// Makes SIGINT and SIGTERM set [`INTERRUPTED`] (a second one ends the process at once).
+/// True until the run has work to save (the render loop starts): an interruption before then
+/// ends the process at once, since loading a scene or solving radiosity does not poll
+/// [`INTERRUPTED`] and nothing would be lost (no output is written yet).
+pub static NOTHING_TO_SAVE: AtomicBool = AtomicBool::new(true);
+
+/// Makes SIGINT and SIGTERM set [`INTERRUPTED`]; the process ends at once on a second one, or
+/// on the first while there is [`NOTHING_TO_SAVE`].
 pub fn catch_signals() {
     static SIGNALS: AtomicU32 = AtomicU32::new(0);
     // Only the first call of a process installs the handler; later calls fail harmlessly.
     let _ = ctrlc::set_handler(|| {
         INTERRUPTED.store(true, Ordering::SeqCst);
-        if SIGNALS.fetch_add(1, Ordering::SeqCst) > 0 {
+        let again = SIGNALS.fetch_add(1, Ordering::SeqCst) > 0;
+        if NOTHING_TO_SAVE.load(Ordering::SeqCst) {
+            eprintln!("candela: interrupted before rendering began: nothing written");
+            std::process::exit(EXIT_INTERRUPTED);
+        }
+        if again {
             std::process::exit(EXIT_INTERRUPTED);
         }
     });

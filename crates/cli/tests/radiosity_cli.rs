@@ -156,3 +156,86 @@ fn bad_radiosity_options_are_errors_naming_the_option() {
     ]);
     assert!(!o.status.success() && stderr(&o).contains("--solver 'jacobi'"));
 }
+
+/// SIGTERM during a long radiosity solve (a 20 000-triangle mesh: a patch per triangle at
+/// least) ends the process at once with status 130 and writes nothing: nothing is finished
+/// before rendering begins, and the solve does not poll for interruptions.
+#[test]
+fn an_interrupted_solve_ends_at_once_and_writes_nothing() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let dir = scratch("radiosity-interrupt");
+    let n = 100;
+    let mut obj = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            obj += &format!(
+                "v {} {} {}\n",
+                i as f32 / n as f32,
+                j as f32 / n as f32,
+                ((i * j) % 7) as f32 * 0.01
+            );
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            obj += &format!(
+                "f {} {} {}\nf {} {} {}\n",
+                a,
+                a + 1,
+                a + n + 2,
+                a,
+                a + n + 2,
+                a + n + 1
+            );
+        }
+    }
+    std::fs::write(dir.join("grid.obj"), obj).unwrap();
+    let scene = dir.join("s.scene");
+    std::fs::write(
+        &scene,
+        "material m(diffuse(<0.7, 0.7, 0.7>))\nmesh(m, identity, \"grid.obj\")\n\
+         material e(diffuse(<0.5, 0.5, 0.5>), <4, 4, 4>)\nsphere(e, translation([0.5, 0.5, 2]) * scaling([0.2, 0.2, 0.2]))\n\
+         camera(perspective, look_at([0.5, -2, 2], [0.5, 0.5, 0], [0, 0, 1]), 1, 1)\n",
+    )
+    .unwrap();
+    let out = dir.join("o.pfm");
+    let child = Command::new(env!("CARGO_BIN_EXE_candela"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "--integrator",
+            "radiosity",
+            "-q",
+        ])
+        .args([
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let start = Instant::now();
+    let pid = child.id().to_string();
+    assert!(Command::new("kill")
+        .args(["-TERM", &pid])
+        .status()
+        .unwrap()
+        .success());
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert!(
+        start.elapsed() < Duration::from_secs(3),
+        "took {:?}",
+        start.elapsed()
+    );
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("nothing written"), "{err}");
+    assert!(!out.exists());
+}
