@@ -21,7 +21,6 @@
 //! takes this path with AVX2 or AVX-512 (measured on meshes-sky: 0.94× the frame time with
 //! either; the kernels run and are tested at every width, SSE included).
 
-use super::batch::BatchHits;
 use super::layout::{Ref, COUNT_MASK, STACK, TRI_LEAF, W as NODE_WIDTH};
 use super::traverse::FAR_SCALE;
 use super::Bvh;
@@ -100,7 +99,7 @@ impl Bvh {
         geometry: &Geometry,
         rays: &RayBatch,
         c: Coherence,
-        hits: &mut BatchHits,
+        hits: &mut [Option<Hit>; BATCH],
         stats: &mut RayStats,
     ) {
         crate::simd::run_wide_at(
@@ -161,7 +160,7 @@ trait PacketQuery {
 }
 
 struct Closest<'a> {
-    hits: &'a mut BatchHits,
+    hits: &'a mut [Option<Hit>; BATCH],
 }
 
 impl PacketQuery for Closest<'_> {
