@@ -141,17 +141,11 @@ pub fn read_file(path: &Path, max_bytes: u64) -> Result<Vec<u8>, InputError> {
     if let Some(kind) = special_kind(&meta) {
         return Err(InputError::NotRegular(kind));
     }
-    let mut bytes = Vec::with_capacity(meta.len().min(max_bytes) as usize);
-    file.take(max_bytes.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(InputError::Io)?;
-    if bytes.len() as u64 > max_bytes {
-        return Err(InputError::TooLarge {
-            size: bytes.len() as u64,
-            max: max_bytes,
-        });
-    }
-    Ok(bytes)
+    read_into(
+        file,
+        Vec::with_capacity(meta.len().min(max_bytes) as usize),
+        max_bytes,
+    )
 }
 
 /// Reads standard input to its end, at most `max_bytes` of it: more is refused as soon as one
@@ -163,7 +157,11 @@ pub fn read_stdin(max_bytes: u64) -> Result<Vec<u8>, InputError> {
 
 /// Reads `r` to its end, at most `max_bytes` of it ([`InputError::TooLarge`] beyond).
 pub fn read_capped(r: impl Read, max_bytes: u64) -> Result<Vec<u8>, InputError> {
-    let mut bytes = Vec::new();
+    read_into(r, Vec::new(), max_bytes)
+}
+
+/// [`read_capped`] into `bytes` (a buffer sized for the expected length).
+fn read_into(r: impl Read, mut bytes: Vec<u8>, max_bytes: u64) -> Result<Vec<u8>, InputError> {
     r.take(max_bytes.saturating_add(1))
         .read_to_end(&mut bytes)
         .map_err(InputError::Io)?;

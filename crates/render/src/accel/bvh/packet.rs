@@ -27,7 +27,7 @@ use super::Bvh;
 use crate::accel::closest;
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
-use crate::math::{RayBatch, BATCH};
+use crate::math::{RayBatch, Vec3, BATCH};
 use crate::shape::ShearedRay;
 use crate::simd::{SimdLevel, Wide, WideKernel};
 use crate::stats::RayStats;
@@ -51,21 +51,11 @@ impl Coherence {
         }
         // Straight from the lanes (this runs for every batch of a deep tree): the sign of the
         // reciprocal, as the single-ray box test sees it (1/-0 = -∞ < 0, 1/NaN is not), and
-        // the axes of `ShearedRay::axes` (the largest |d|, ties as `Vec3::max_dimension`).
+        // the axes of `ShearedRay::axes` (the largest |d| and its sign).
         let key = |i: usize| {
-            let d = [rays.d[0][i], rays.d[1][i], rays.d[2][i]];
-            let a = d.map(f32::abs);
-            let kz = if a[0] > a[1] {
-                if a[0] > a[2] {
-                    0
-                } else {
-                    2
-                }
-            } else if a[1] > a[2] {
-                1
-            } else {
-                2
-            };
+            let v = Vec3::new(rays.d[0][i], rays.d[1][i], rays.d[2][i]);
+            let d = [v.x, v.y, v.z];
+            let kz = v.max_dimension();
             let negative = |x: f32| (x.is_sign_negative() && !x.is_nan()) as u32;
             (kz as u32) << 4
                 | ((d[kz] < 0.0) as u32) << 3
@@ -144,8 +134,8 @@ impl Bvh {
 trait PacketQuery {
     /// Whether children are visited nearest first.
     const ORDERED: bool;
-    /// Lane `i` hit primitive `id` at `t` with barycentrics `uv` (sub-primitive `sub`); returns
-    /// the lane's new `tmax` when the hit is kept, and whether the lane is finished.
+    /// Lane `i` found the hit `h`; returns the lane's new `tmax` when the hit is kept, and
+    /// whether the lane is finished.
     fn hit(&mut self, i: usize, h: Hit) -> (Option<f32>, bool);
     /// A leaf of other primitives for lane `i` along `ray`; returns what [`Self::hit`] does.
     fn other_leaf(
@@ -168,16 +158,9 @@ impl PacketQuery for Closest<'_> {
 
     #[inline(always)]
     fn hit(&mut self, i: usize, h: Hit) -> (Option<f32>, bool) {
-        let better = match &self.hits[i] {
-            None => true,
-            Some(b) => h.t < b.t || (h.t == b.t && h.prim < b.prim),
-        };
-        if better {
-            self.hits[i] = Some(h);
-            (Some(h.t.next_up()), false)
-        } else {
-            (None, false)
-        }
+        // The single-ray rule: smaller t, equal t to the smaller id.
+        let kept = closest(&mut self.hits[i], h);
+        (kept.then(|| h.t.next_up()), false)
     }
 
     fn other_leaf(
@@ -190,8 +173,8 @@ impl PacketQuery for Closest<'_> {
         stats: &mut RayStats,
     ) -> (Option<f32>, bool) {
         match bvh.leaf_closest(geometry, r, ray, stats) {
-            Some(h) if closest(&mut self.hits[i], h) => (Some(h.t.next_up()), false),
-            _ => (None, false),
+            Some(h) => self.hit(i, h),
+            None => (None, false),
         }
     }
 }
