@@ -222,6 +222,13 @@ impl Geometry {
     /// The full interaction for a hit found along `ray`.
     #[inline(always)]
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        self.interaction_with(ray, hit, true)
+    }
+
+    /// [`Geometry::interaction`], with texture coordinates only when `uv`: shapes whose
+    /// coordinates cost something to compute (spheres) leave them at zero otherwise.
+    #[inline]
+    pub fn interaction_with(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfaceInteraction {
         let sh = ShapeHit {
             t: hit.t,
             uv: hit.uv,
@@ -244,6 +251,7 @@ impl Geometry {
                         obj.props,
                         Some(c.face_frame(sh.sub)),
                     ),
+                    Shape::Sphere(s) if !uv => (s.geometry_without_uv(ray, sh.t), obj.props, None),
                     shape => (
                         shape.geometry(ray, &sh),
                         shape.hit_props(&sh).unwrap_or(obj.props),

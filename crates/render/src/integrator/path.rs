@@ -121,7 +121,7 @@ impl Path {
             }
             return done;
         };
-        let si = scene.geometry.interaction(&st.ray, &hit);
+        let si = scene.interaction(&st.ray, &hit);
 
         // Emission found by BSDF sampling (or by the camera).
         if st.depth > 0 || !self.hide_emitters {
