@@ -227,11 +227,20 @@ fn render_pixel(
     let mut weights = [1f32; BATCH];
     let mut lambdas = [Wavelengths::Rgb; BATCH];
     let spectral = settings.spectral && integrator.spectral();
+    // A pinhole's rays are made a batch at a time, from their screen points.
+    let pinhole = scene.camera.lens.is_none();
+    let mut screen = [[0f32; 2]; BATCH];
     for start in (first..last).step_by(BATCH) {
         let n = (last - start).min(BATCH as u32) as usize;
         for k in 0..n {
-            (rays[k], weights[k]) =
-                camera_ray(scene, (w, h), (x, y), start + k as u32, (sampler, filter));
+            if pinhole {
+                let offset;
+                (offset, weights[k]) = filter.sample(sampler.pixel_sample(start + k as u32));
+                screen[k] = screen_point((w, h), (x, y), offset);
+            } else {
+                (rays[k], weights[k]) =
+                    camera_ray(scene, (w, h), (x, y), start + k as u32, (sampler, filter));
+            }
             // The sample's wavelengths: the number after the camera's.
             lambdas[k] = if spectral {
                 Wavelengths::sample(sampler.next_1d())
@@ -239,6 +248,9 @@ fn render_pixel(
                 Wavelengths::Rgb
             };
             cursors[k] = sampler.cursor();
+        }
+        if pinhole {
+            scene.camera.rays(&screen, n, &mut rays);
         }
         let batch = SampleBatch {
             rays: &rays[..n],
@@ -308,12 +320,18 @@ fn ray_through(
     [sx, sy]: [f32; 2],
     lens: impl FnOnce() -> [f32; 2],
 ) -> Ray {
-    let u = (x as f32 + sx) / w;
-    let v = 1.0 - (y as f32 + sy) / h;
+    let [u, v] = screen_point((w, h), (x, y), [sx, sy]);
     match scene.camera.lens {
         None => scene.camera.ray(u, v),
         Some(_) => scene.camera.ray_through_lens(u, v, lens()),
     }
+}
+
+/// The point (u, v) of the screen square at `offset` (in pixels from the corner) in pixel
+/// (x, y) of a `w × h` image (v upwards).
+#[inline(always)]
+fn screen_point((w, h): (f32, f32), (x, y): (usize, usize), [sx, sy]: [f32; 2]) -> [f32; 2] {
+    [(x as f32 + sx) / w, 1.0 - (y as f32 + sy) / h]
 }
 
 /// Appends to `sums` the fixed-point sums of the output variables of samples `first..last` of
