@@ -106,8 +106,8 @@ impl Camera {
     /// [`Camera::ray`] for each point `uv[k]` of the screen, into `rays[k]` (a camera without
     /// a lens): the same rays, bit for bit, with the pinhole's position computed once and the
     /// directions lane by lane in arrays the compiler vectorises.
-    pub fn rays(&self, uv: &[[f32; 2]; BATCH], n: usize, rays: &mut [Ray; BATCH]) {
-        debug_assert!(self.lens.is_none() && n <= BATCH);
+    pub fn rays(&self, uv: &[[f32; 2]; BATCH], n: usize, rays: &mut [Ray]) {
+        debug_assert!(self.lens.is_none() && n <= BATCH && n <= rays.len());
         let Projection::Perspective { distance } = self.projection else {
             for (r, &[u, v]) in rays.iter_mut().zip(uv).take(n) {
                 *r = self.ray(u, v);

@@ -16,7 +16,7 @@ use crate::aov::{aov_sample, emission_aa as emission_aa_of, near_light_edge, Aov
 use crate::film::{to_fixed, Film, Window};
 use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
-use crate::integrator::{Integrator, SampleBatch};
+use crate::integrator::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::math::{Point3, Ray, Vec3, BATCH};
 use crate::sampling::pcg::{hash2, unit_pair};
 use crate::sampling::{Sampler, SamplerKind};
@@ -217,21 +217,24 @@ fn render_pixel(
         (y * settings.width + x) as u64,
         settings.spp,
     );
-    sampler.draw_until(last);
+    sampler.draw_range(first, last);
     let mut sum = [0i128; 3];
-    // The samples go to the integrator in groups of `BATCH`, traced side by side; each keeps
-    // its own place in the pixel's sample sequence.
-    let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
-    let mut cursors = [sampler.cursor(); BATCH];
-    let mut radiance = [SampledSpectrum::ZERO; BATCH];
-    let mut weights = [1f32; BATCH];
-    let mut lambdas = [Wavelengths::Rgb; BATCH];
+    // The samples go to the integrator up to `SAMPLE_QUEUE` at a time (never across a multiple
+    // of it, where the sampler's tables start over), traced side by side; each keeps its own
+    // place in the pixel's sample sequence.
+    const QUEUE: u32 = SAMPLE_QUEUE as u32;
+    let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); SAMPLE_QUEUE];
+    let mut cursors = [sampler.cursor(); SAMPLE_QUEUE];
+    let mut radiance = [SampledSpectrum::ZERO; SAMPLE_QUEUE];
+    let mut weights = [1f32; SAMPLE_QUEUE];
+    let mut lambdas = [Wavelengths::Rgb; SAMPLE_QUEUE];
     let spectral = settings.spectral && integrator.spectral();
     // A pinhole's rays are made a batch at a time, from their screen points.
     let pinhole = scene.camera.lens.is_none();
-    let mut screen = [[0f32; 2]; BATCH];
-    for start in (first..last).step_by(BATCH) {
-        let n = (last - start).min(BATCH as u32) as usize;
+    let mut screen = [[0f32; 2]; SAMPLE_QUEUE];
+    let mut start = first;
+    while start < last {
+        let n = (last.min((start / QUEUE + 1) * QUEUE) - start) as usize;
         for k in 0..n {
             if pinhole {
                 let offset;
@@ -250,7 +253,10 @@ fn render_pixel(
             cursors[k] = sampler.cursor();
         }
         if pinhole {
-            scene.camera.rays(&screen, n, &mut rays);
+            for c in (0..n).step_by(BATCH) {
+                let batch: &[[f32; 2]; BATCH] = screen[c..c + BATCH].try_into().unwrap();
+                scene.camera.rays(batch, (n - c).min(BATCH), &mut rays[c..]);
+            }
         }
         let batch = SampleBatch {
             rays: &rays[..n],
@@ -270,6 +276,7 @@ fn render_pixel(
                 stats.rejected_samples += 1;
             }
         }
+        start += n as u32;
     }
     (sum, last.saturating_sub(first))
 }

@@ -107,6 +107,12 @@ impl Bvh {
         (prims, rest)
     }
 
+    /// True when batches test every primitive against all their rays at once (small scenes),
+    /// a cost that does not shrink with the number of active lanes.
+    pub fn is_flat(&self) -> bool {
+        !self.flat_prims.is_empty() || !self.flat_rest.is_empty()
+    }
+
     /// The closest hit of every active lane of `rays`.
     pub fn intersect_batch(
         &self,
