@@ -9,7 +9,7 @@
 
 use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
-use crate::math::{Ray, RayBatch, BATCH};
+use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::sampler::ONE_MINUS_EPSILON;
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -341,16 +341,4 @@ impl Integrator for Path {
             }
         }
     }
-}
-
-/// The set bits of `m`, lowest first.
-#[inline(always)]
-fn lanes(mut m: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (m != 0).then(|| {
-            let i = m.trailing_zeros() as usize;
-            m &= m - 1;
-            i
-        })
-    })
 }
