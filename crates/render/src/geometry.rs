@@ -219,6 +219,40 @@ impl Geometry {
         (0..self.instances.len() as u32).fold(own, |b, i| b.union(self.instance_bounds(i)))
     }
 
+    /// Starts loading what [`Geometry::interaction`] reads for the hits in `lanes` (bit i:
+    /// `hits[i]`), in stages over all of them, so that their cache misses overlap rather than
+    /// come one after another as each interaction is computed. Only triangles need it (their
+    /// primitive record, then their indices, then their vertices).
+    pub fn prefetch_interactions(&self, hits: &[Option<Hit>], lanes: u32) {
+        let each = |f: &mut dyn FnMut(u32)| {
+            for (i, h) in hits.iter().enumerate() {
+                if lanes >> i & 1 != 0 {
+                    if let Some(h) = h {
+                        f(h.prim);
+                    }
+                }
+            }
+        };
+        each(&mut |p| {
+            if let Some(r) = self.prims.get(p as usize) {
+                crate::simd::prefetch(r);
+            }
+        });
+        each(&mut |p| {
+            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p as usize) {
+                let m = &self.meshes[mesh as usize];
+                if let Some(ix) = m.indices.get(tri as usize) {
+                    crate::simd::prefetch(ix);
+                }
+            }
+        });
+        each(&mut |p| {
+            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p as usize) {
+                self.meshes[mesh as usize].prefetch_vertices(tri);
+            }
+        });
+    }
+
     /// The full interaction for a hit found along `ray`.
     #[inline(always)]
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {

@@ -290,6 +290,7 @@ impl Integrator for Path {
                 batch.set(i, &st[i].ray);
             }
             scene.intersect_batch(&batch, &mut hits, stats);
+            scene.geometry.prefetch_interactions(&hits, alive);
             shadows.active = 0;
             for i in lanes(alive) {
                 sampler.resume(cursors[i]);
