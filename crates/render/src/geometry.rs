@@ -16,6 +16,10 @@ use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::math::{Bounds3, Ray, Transform};
 use crate::shape::{Mesh, Shape, ShapeHit, ShearedRay};
 
+/// Geometries of at least this many primitives prefetch what shading their hits reads
+/// ([`Geometry::prefetch_interactions`]); smaller ones stay in the caches.
+pub const PREFETCH_PRIMS: usize = 1 << 15;
+
 /// A placement of a shared group of shapes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Instance {
@@ -222,35 +226,36 @@ impl Geometry {
     /// Starts loading what [`Geometry::interaction`] reads for the hits in `lanes` (bit i:
     /// `hits[i]`), in stages over all of them, so that their cache misses overlap rather than
     /// come one after another as each interaction is computed. Only triangles need it (their
-    /// primitive record, then their indices, then their vertices).
+    /// primitive record, then their indices, then their vertices), and only in geometries too
+    /// large for the caches ([`PREFETCH_PRIMS`] primitives or more).
+    #[inline]
     pub fn prefetch_interactions(&self, hits: &[Option<Hit>], lanes: u32) {
-        let each = |f: &mut dyn FnMut(u32)| {
-            for (i, h) in hits.iter().enumerate() {
-                if lanes >> i & 1 != 0 {
-                    if let Some(h) = h {
-                        f(h.prim);
-                    }
-                }
-            }
+        if self.prims.len() < PREFETCH_PRIMS {
+            return;
+        }
+        let prims = || {
+            hits.iter()
+                .enumerate()
+                .filter(move |(i, _)| lanes >> i & 1 != 0)
+                .filter_map(|(_, h)| h.as_ref().map(|h| h.prim as usize))
         };
-        each(&mut |p| {
-            if let Some(r) = self.prims.get(p as usize) {
+        for p in prims() {
+            if let Some(r) = self.prims.get(p) {
                 crate::simd::prefetch(r);
             }
-        });
-        each(&mut |p| {
-            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p as usize) {
-                let m = &self.meshes[mesh as usize];
-                if let Some(ix) = m.indices.get(tri as usize) {
+        }
+        for p in prims() {
+            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p) {
+                if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
                     crate::simd::prefetch(ix);
                 }
             }
-        });
-        each(&mut |p| {
-            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p as usize) {
+        }
+        for p in prims() {
+            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p) {
                 self.meshes[mesh as usize].prefetch_vertices(tri);
             }
-        });
+        }
     }
 
     /// The full interaction for a hit found along `ray`.
