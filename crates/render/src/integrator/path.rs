@@ -307,6 +307,7 @@ impl Integrator for Path {
                 batch.set(i, &st[i].ray);
             }
             scene.intersect_batch(&batch, &mut hits, stats);
+            scene.geometry.prefetch_interactions(&hits, alive);
             shadows.active = 0;
             let mut ended = 0u32;
             for i in lanes(alive) {
