@@ -63,9 +63,10 @@ pub trait Integrator: Sync {
     }
 }
 
-/// The most samples of a pixel handed to [`Integrator::radiance_batch`] at once: four batches,
-/// the samples whose numbers a pixel sampler tabulates together.
-pub const SAMPLE_QUEUE: usize = 4 * crate::math::BATCH;
+/// The most samples of a pixel handed to [`Integrator::radiance_batch`] at once: the samples
+/// whose numbers a pixel sampler tabulates together (four batches).
+pub const SAMPLE_QUEUE: usize = crate::sampling::sampler::TABLE_SAMPLES;
+const _: () = assert!(SAMPLE_QUEUE.is_multiple_of(crate::math::BATCH));
 
 /// Samples of one pixel traced side by side: sample i has the camera ray `rays[i]`, the
 /// wavelengths `lambdas[i]` (left as the path ends them) and its place in the pixel's sample

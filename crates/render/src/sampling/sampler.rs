@@ -99,6 +99,10 @@ enum Mode {
 /// Samples whose first dimensions a Sobol pixel sampler computes together.
 const CHUNK: usize = 64;
 
+/// The samples of a pixel whose numbers a Sobol pixel sampler tabulates together: samples
+/// `k·TABLE_SAMPLES..(k + 1)·TABLE_SAMPLES`, drawn in any order, share the tables.
+pub const TABLE_SAMPLES: usize = CHUNK;
+
 /// Dimensions a Sobol pixel sampler computes a chunk at a time (at most 32).
 const BATCH_DIMS: usize = 32;
 
