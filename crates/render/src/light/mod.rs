@@ -13,11 +13,13 @@ mod area;
 mod emission;
 mod infinite;
 mod point;
+mod select;
 
 pub use area::{AreaLight, AreaShape};
 pub use emission::Emission;
 pub use infinite::{Environment, HemisphereLight};
 pub use point::{Falloff, PointLight, SpotLight, SpotPattern, SpotProfile};
+pub use select::{LightSelector, ShadingPoint, MAX_IMPORTANCE_LIGHTS};
 
 use crate::color::Rgb;
 use crate::geometry::Geometry;

@@ -1,0 +1,319 @@
+//! Which light next-event estimation samples at a shading point.
+//!
+//! In scenes with up to [`MAX_IMPORTANCE_LIGHTS`] lights, every light's *importance* at the
+//! shading point is evaluated and one light is picked in proportion to it, by inverting the
+//! cumulative sum with the light sample's first number (which is then rescaled, so that each
+//! light keeps a stratified share of the pixel's samples). The importance estimates the
+//! unshadowed irradiance the light delivers:
+//! - point, spot and distant lights: exactly that, I·fall-off·profile·cos θ (or E·cos θ), from
+//!   the light's colour averaged over its channels (a spot's projected texture is left out);
+//! - a hemisphere light: its closed form π L (1 + n·up)/2;
+//! - an environment: π times its mean radiance;
+//! - an emissive shape: the bound of pbrt-v4's `LightBounds::Importance` (power × the largest
+//!   cosine at the light × the largest cosine at the point / squared distance, the cosines
+//!   widened by the cone of directions the light's bounding sphere subtends), with the power
+//!   taken per side as L·A, so that it compares with the lights above.
+//!
+//! The cosine at the point is taken on the side of the outgoing direction when the BSDF only
+//! reflects, and on either side otherwise. A light of importance 0 is never sampled; that costs
+//! no bias because multiple importance sampling then gives BSDF sampling its full weight. With
+//! more lights, or one, the choice is uniform. [`LightSelector::pmf`] recomputes the
+//! probability with which the vertex a path left picked a light, for the MIS weights of emitters
+//! that BSDF sampling finds.
+
+use super::{AreaShape, Emission, Light};
+use crate::geometry::Geometry;
+use crate::math::{Bounds3, Point3, Vec3, PI};
+use crate::sampling::sampler::ONE_MINUS_EPSILON;
+
+/// Most lights whose importance is evaluated one by one at every shading point; scenes with
+/// more lights choose uniformly.
+pub const MAX_IMPORTANCE_LIGHTS: usize = 32;
+
+/// A shading point as light selection and light sampling see it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingPoint {
+    /// The position.
+    pub p: Point3,
+    /// The unit shading normal, on the side of the outgoing direction.
+    pub n: Vec3,
+    /// The BSDF reflects only (into the hemisphere of `n`): lights may restrict their samples
+    /// to that hemisphere.
+    pub reflect_only: bool,
+}
+
+impl ShadingPoint {
+    /// A point with no surface (no normal to favour, no hemisphere to restrict to).
+    pub fn at(p: Point3) -> Self {
+        Self {
+            p,
+            n: Vec3::Z,
+            reflect_only: false,
+        }
+    }
+
+    /// The cosine the importance uses for the unit direction `w` to a light: signed on the side
+    /// of `n` when the BSDF only reflects, its absolute value otherwise.
+    #[inline(always)]
+    fn cos(&self, w: Vec3) -> f32 {
+        let c = self.n.dot(w);
+        if self.reflect_only {
+            c
+        } else {
+            c.abs()
+        }
+    }
+}
+
+/// What the importance of one light needs, computed once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Bound {
+    /// Point, spot, distant and hemisphere lights: computed exactly from the light.
+    Exact,
+    /// A light at infinity of the given irradiance (π × mean radiance).
+    Infinite(f32),
+    /// An emissive shape.
+    Shape {
+        /// Centre of its bounding box.
+        centre: Point3,
+        /// Squared radius of the bounding sphere around `centre`.
+        radius2: f32,
+        /// Axis of the cone bounding its normals.
+        axis: Vec3,
+        /// Cosine of that cone's half-angle (1: one normal; −1: every direction).
+        cos_o: f32,
+        /// Emits on both sides.
+        two_sided: bool,
+        /// Power per side over π: L·A.
+        phi: f32,
+    },
+}
+
+/// The light selection of a scene: importance at the shading point for few lights, uniform for
+/// many.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightSelector {
+    /// One bound per light; empty for the uniform choice.
+    bounds: Vec<Bound>,
+}
+
+/// cos(θa − θb) clamped to 1 when θa < θb (pbrt-v4's `cosSubClamped`).
+#[inline(always)]
+fn cos_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if cos_a > cos_b {
+        1.0
+    } else {
+        cos_a * cos_b + sin_a * sin_b
+    }
+}
+
+/// sin(θa − θb) clamped to 0 when θa < θb (pbrt-v4's `sinSubClamped`).
+#[inline(always)]
+fn sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+    if cos_a > cos_b {
+        0.0
+    } else {
+        sin_a * cos_b - cos_a * sin_b
+    }
+}
+
+#[inline(always)]
+fn safe_sqrt(x: f32) -> f32 {
+    x.max(0.0).sqrt()
+}
+
+impl LightSelector {
+    /// The selector for `lights` (with the emissions and geometry of their shapes).
+    pub fn new(lights: &[Light], emissions: &[Emission], geometry: &Geometry) -> Self {
+        if lights.len() <= 1 || lights.len() > MAX_IMPORTANCE_LIGHTS {
+            return Self::default();
+        }
+        let bounds = lights
+            .iter()
+            .map(|l| match l {
+                Light::Point(..) | Light::Spot(..) | Light::Distant(..) | Light::Hemisphere(..) => {
+                    Bound::Exact
+                }
+                Light::Environment(e) => Bound::Infinite(PI * e.radiance.average().average()),
+                Light::Area(a) => {
+                    let e = &emissions[a.emission as usize];
+                    let phi = e.radiance.average().average() * a.area;
+                    let (b, axis, cos_o) = match &a.shape {
+                        AreaShape::Parallelogram(q) => (q.bounds(), q.normal().to_vec(), 1.0),
+                        AreaShape::Disk(d) => (
+                            d.bounds(),
+                            d.world_from_object
+                                .normal(Vec3::Z.to_normal())
+                                .to_vec()
+                                .normalize(),
+                            1.0,
+                        ),
+                        AreaShape::Sphere { sphere, .. } => (sphere.bounds(), Vec3::Z, -1.0),
+                        AreaShape::Cube { cube, .. } => (cube.bounds(), Vec3::Z, -1.0),
+                        AreaShape::Mesh { mesh, .. } => {
+                            let m = &geometry.meshes()[*mesh as usize];
+                            let first = m.positions.first().copied().unwrap_or(Point3::ORIGIN);
+                            let b = m
+                                .positions
+                                .iter()
+                                .fold(Bounds3::point(first), |b, &p| b.union_point(p));
+                            (b, Vec3::Z, -1.0)
+                        }
+                    };
+                    let d = b.diagonal();
+                    let ok = phi.is_finite() && d.is_finite() && axis.is_finite();
+                    Bound::Shape {
+                        centre: b.centroid(),
+                        radius2: 0.25 * d.squared_norm(),
+                        axis,
+                        cos_o,
+                        two_sided: e.two_sided,
+                        phi: if ok { phi.max(0.0) } else { 0.0 },
+                    }
+                }
+            })
+            .collect();
+        Self { bounds }
+    }
+
+    /// True when lights are chosen uniformly.
+    pub fn is_uniform(&self) -> bool {
+        self.bounds.is_empty()
+    }
+
+    /// The importance of light `i` at `sp` (see the module's documentation).
+    #[inline]
+    fn importance(&self, lights: &[Light], i: usize, sp: &ShadingPoint) -> f32 {
+        let v = match self.bounds[i] {
+            Bound::Exact => match &lights[i] {
+                Light::Point(l, _) => {
+                    let to = l.position - sp.p;
+                    let d = to.norm();
+                    l.intensity.average() * l.falloff.scale(d) * sp.cos(to / d)
+                }
+                Light::Spot(l, _) => {
+                    let to = l.position - sp.p;
+                    let d = to.norm();
+                    let wi = to / d;
+                    l.intensity.average() * l.falloff.scale(d) * l.profile(-wi) * sp.cos(wi)
+                }
+                Light::Distant(l, _) => l.irradiance.average() * sp.cos(-l.direction),
+                Light::Hemisphere(h, _) => {
+                    PI * h.radiance.average() * 0.5 * (1.0 + sp.cos(h.up).clamp(-1.0, 1.0))
+                }
+                _ => 0.0,
+            },
+            Bound::Infinite(e) => e,
+            Bound::Shape {
+                centre,
+                radius2,
+                axis,
+                cos_o,
+                two_sided,
+                phi,
+            } => {
+                let to = centre - sp.p;
+                let d2 = to.squared_norm();
+                // Inside the bounding sphere every direction may reach the light.
+                let (sin_b, cos_b) = if d2 > radius2 {
+                    let s2 = radius2 / d2;
+                    (s2.sqrt(), safe_sqrt(1.0 - s2))
+                } else {
+                    (1.0, -1.0)
+                };
+                let wi = to / d2.sqrt();
+                // The angle between the cone's axis and the direction from the light.
+                let mut cos_w = -axis.dot(wi);
+                if two_sided {
+                    cos_w = cos_w.abs();
+                }
+                let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
+                let sin_o = safe_sqrt(1.0 - cos_o * cos_o);
+                let cos_x = cos_sub(sin_w, cos_w, sin_o, cos_o);
+                let sin_x = sin_sub(sin_w, cos_w, sin_o, cos_o);
+                let cos_light = cos_sub(sin_x, cos_x, sin_b, cos_b);
+                if !(cos_light > 0.0) {
+                    return 0.0;
+                }
+                let cos_i = sp.cos(wi).clamp(-1.0, 1.0);
+                let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+                let cos_surface = cos_sub(sin_i, cos_i, sin_b, cos_b);
+                phi * cos_light * cos_surface / d2.max(radius2)
+            }
+        };
+        if v > 0.0 && v.is_finite() {
+            v
+        } else {
+            0.0
+        }
+    }
+
+    /// Picks one of `lights` at `sp` with the uniform number `u`: its index, the probability
+    /// of that choice and `u` rescaled to [0, 1) within the light's share. `None` when no
+    /// light has any importance there.
+    #[inline]
+    pub fn pick(&self, lights: &[Light], sp: &ShadingPoint, u: f32) -> Option<(usize, f32, f32)> {
+        let n = lights.len();
+        if n == 0 {
+            return None;
+        }
+        if self.bounds.len() != n {
+            let pick = ((u * n as f32) as usize).min(n - 1);
+            let v = if n > 1 {
+                (u * n as f32 - pick as f32).min(ONE_MINUS_EPSILON)
+            } else {
+                u
+            };
+            return Some((pick, 1.0 / n as f32, v));
+        }
+        let mut w = [0f32; MAX_IMPORTANCE_LIGHTS];
+        let mut sum = 0.0;
+        for (i, wi) in w.iter_mut().enumerate().take(n) {
+            *wi = self.importance(lights, i, sp);
+            sum += *wi;
+        }
+        if !(sum > 0.0 && sum.is_finite()) {
+            return None;
+        }
+        let x = u * sum;
+        let mut acc = 0.0;
+        let mut last = 0;
+        for (i, &wi) in w.iter().enumerate().take(n) {
+            if wi <= 0.0 {
+                continue;
+            }
+            last = i;
+            if x < acc + wi {
+                let v = ((x - acc) / wi).clamp(0.0, ONE_MINUS_EPSILON);
+                return Some((i, wi / sum, v));
+            }
+            acc += wi;
+        }
+        // Round-off past the last share: the last light with some importance.
+        let wl = w[last];
+        Some((last, wl / sum, ONE_MINUS_EPSILON))
+    }
+
+    /// The probability with which [`LightSelector::pick`] chooses light `i` at `sp`.
+    #[inline]
+    pub fn pmf(&self, lights: &[Light], sp: &ShadingPoint, i: usize) -> f32 {
+        let n = lights.len();
+        if self.bounds.len() != n {
+            return if n == 0 { 0.0 } else { 1.0 / n as f32 };
+        }
+        let mut sum = 0.0;
+        let mut wi = 0.0;
+        for j in 0..n {
+            let w = self.importance(lights, j, sp);
+            sum += w;
+            if j == i {
+                wi = w;
+            }
+        }
+        if sum > 0.0 && sum.is_finite() {
+            wi / sum
+        } else {
+            0.0
+        }
+    }
+}
