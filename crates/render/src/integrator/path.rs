@@ -113,7 +113,12 @@ impl Path {
                         1.0
                     } else {
                         let pick = scene.light_selector.pmf(lights, &st.prev, i as usize);
-                        power_heuristic(1.0, st.prev_pdf, 1.0, pick * light.pdf_escape(d))
+                        power_heuristic(
+                            1.0,
+                            st.prev_pdf,
+                            1.0,
+                            pick * light.pdf_escape_from(d, &st.prev),
+                        )
                     };
                     st.l += st.beta * le * w;
                 }
@@ -168,7 +173,7 @@ impl Path {
                 u[0] = u0;
                 let light = &lights[pick];
                 if let Some(ls) =
-                    light.sample(&scene.geometry, &scene.emissions, si.p, u, &st.lambda)
+                    light.sample_from(&scene.geometry, &scene.emissions, &sp, u, &st.lambda)
                 {
                     let wi = bsdf.local_wi(ls.wi, flip);
                     let f = bsdf.eval_local(wo, wi);
