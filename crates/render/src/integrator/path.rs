@@ -1,9 +1,10 @@
 //! Path tracing of the rendering equation
 //! L(x→Θ) = L_e(x→Θ) + ∫ f_r(x, Ψ→Θ) L(x←Ψ) cos(N_x, Ψ) dω_Ψ.
 //!
-//! [`Path`]: at every vertex one light is sampled (next-event estimation) and one BSDF direction
-//! is sampled; both estimates are combined by multiple importance sampling with the power
-//! heuristic (Veach 1997). Russian roulette starts at `rr_depth` (default 5). `max_depth` follows
+//! [`Path`]: at every vertex one light is sampled (next-event estimation: the light chosen by
+//! its importance at the shading point, see [`crate::light::LightSelector`], and sampled by
+//! [`crate::light::Light::sample_from`]) and one BSDF direction is sampled; both estimates are
+//! combined by multiple importance sampling with the power heuristic (Veach 1997). Russian roulette starts at `rr_depth` (default 5). `max_depth` follows
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
 //! (The course's branching estimator is [`super::CoursePath`].)
 

@@ -5,9 +5,10 @@
 //!   direction and the ambient, diffuse and specular intensities it delivers at a point
 //!   ([`Light::local`]); each light may carry separate intensities
 //!   (`components(<Ia>, <Id>, <Is>)`, default I_a = 0, I_d = I_s = I);
-//! - the path tracer samples lights ([`Light::sample`]) and asks for the density of a direction
-//!   found by BSDF sampling ([`Light::pdf_hit`], [`Light::pdf_escape`]) for multiple importance
-//!   sampling.
+//! - the path tracer chooses a light ([`LightSelector`]), samples it as seen from a shading
+//!   point ([`Light::sample_from`]; [`Light::sample`] from a bare point) and asks for the
+//!   density of a direction found by BSDF sampling ([`Light::pdf_hit`],
+//!   [`Light::pdf_escape_from`]) for multiple importance sampling.
 
 mod area;
 mod emission;
