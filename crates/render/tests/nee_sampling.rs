@@ -1,5 +1,6 @@
-//! Next-event estimation's samplers against their densities: rectangle lights sampled by solid
-//! angle (spherical rectangles) against `Light::pdf_hit`, constant environments and hemisphere
+//! Next-event estimation's samplers against their densities: rectangle lights (in a general
+//! orientation, from near and far, in front, behind, at grazing angles) against
+//! `Light::pdf_hit`, constant environments and hemisphere
 //! lights sampled cosine-weighted about a shading normal against `Light::pdf_escape_from`
 //! (χ² goodness of fit, and the density each sample reports equal to the one MIS uses), and the
 //! importance-based choice of a light (`LightSelector`) against its probabilities.
@@ -99,12 +100,11 @@ fn hit_pdf(s: &Scene, p: Point3, d: Vec3) -> f32 {
     }
 }
 
-// The directions of rectangle samples follow pdf_hit (uniform in the subtended solid angle),
-// from in front, from close above a corner (nearly a hemisphere), at a grazing angle and from
+// The directions of rectangle samples follow pdf_hit, from in front, from close above a corner (nearly a hemisphere), at a grazing angle and from
 // behind (two-sided); a one-sided rectangle seen from behind gives no sample and has density
 // 0.
 #[test]
-fn chi2_rectangle_by_solid_angle() {
+fn chi2_rectangle_light() {
     let level = sidak(ALPHA, tests_count());
     let mut failures = Vec::new();
     for (name, p, two_sided, power) in rect_cases() {
@@ -144,8 +144,7 @@ fn chi2_rectangle_by_solid_angle() {
 }
 
 // The density every rectangle sample reports is the one MIS uses for the point it hit
-// (pdf_hit), by solid angle and in the fall-back to area sampling (a distant point sees less
-// than 10⁻⁴ sr; a point in the rectangle's plane sees none).
+// (pdf_hit), from near, far (less than 10⁻⁴ sr), behind and nearly in the rectangle's plane.
 #[test]
 fn rectangle_sample_density_is_pdf_hit() {
     let s = rect_scene(true);

@@ -1,9 +1,7 @@
 //! Area lights: emissive shapes sampled by area or by solid angle.
 //!
 //! Every emissive surface is an area light. Spheres seen from outside are sampled uniformly in
-//! the cone they subtend (when their placement is a similarity), rectangles uniformly in the
-//! solid angle they subtend (Ureña et al. 2013's spherical rectangles; by area when that is
-//! below 10⁻⁴ sr or the point lies in their plane); other spheres (ellipsoids), other
+//! the cone they subtend (when their placement is a similarity); other spheres (ellipsoids),
 //! parallelograms, disks, boxes and meshes are sampled uniformly by area (mesh triangles chosen
 //! in proportion to their area, which for a uniform emitter is their power). Planes, polyhedra
 //! and CSG emit but are not sampled: paths find them by BSDF sampling alone.
@@ -58,8 +56,6 @@ pub struct AreaLight {
     pub area: f32,
     /// 1 / `area`: the density of uniform area sampling.
     inv_area: f32,
-    /// A parallelogram whose edges are orthogonal: sampled by solid angle.
-    rectangle: bool,
 }
 
 impl AreaLight {
@@ -83,21 +79,17 @@ impl AreaLight {
             emission,
             area,
             inv_area: 1.0 / area,
-            rectangle: false,
         }
     }
 
     /// A parallelogram light.
     pub fn parallelogram(p: Parallelogram, emission: u32) -> Self {
         let area = p.area();
-        // Orthogonal edges (to round-off): a rectangle.
-        let rectangle = p.v.dot(p.w).abs() <= 1e-5 * p.v.norm() * p.w.norm();
         Self {
             shape: AreaShape::Parallelogram(p),
             emission,
             area,
             inv_area: 1.0 / area,
-            rectangle,
         }
     }
 
@@ -110,7 +102,6 @@ impl AreaLight {
             emission,
             area,
             inv_area: 1.0 / area,
-            rectangle: false,
         }
     }
 
@@ -126,7 +117,6 @@ impl AreaLight {
             emission,
             area,
             inv_area: 1.0 / area,
-            rectangle: false,
         }
     }
 
@@ -142,7 +132,6 @@ impl AreaLight {
             emission,
             area,
             inv_area: 1.0 / area,
-            rectangle: false,
         }
     }
 
@@ -203,32 +192,8 @@ impl AreaLight {
     ) -> Option<LightSample> {
         let emission = &emissions[self.emission as usize];
         // Parallelograms (the usual area light) on a straight path of their own, so that the
-        // sampled point stays in registers. A one-sided one seen from behind sends nothing.
-        // Rectangles are sampled uniformly in the solid angle they subtend (Ureña et al.
-        // 2013), unless it is tiny (area sampling is as good there, and safer).
+        // sampled point stays in registers.
         if let AreaShape::Parallelogram(q) = &self.shape {
-            if !emission.two_sided && !(q.normal().dot_vec(p - q.p) > 0.0) {
-                return None;
-            }
-            if self.rectangle {
-                if let Some(sr) = warp::SphericalRectangle::new(p, q.p, q.v, q.w) {
-                    let (s, t) = sr.sample(u)?;
-                    let g = q.geometry(s, t);
-                    let to = g.p - p;
-                    let d = to.norm();
-                    if !(d > 0.0) {
-                        return None;
-                    }
-                    let wi = to / d;
-                    return Some(LightSample {
-                        wi,
-                        li: emission.radiance_at(g.uv, g.n, -wi, lambda),
-                        pdf: 1.0 / sr.solid_angle(),
-                        delta: false,
-                        target: Target::Surface(g.p, g.n),
-                    });
-                }
-            }
             return area_sample(emission, p, q.geometry(u[0], u[1]), self.inv_area, lambda);
         }
         if let AreaShape::Sphere {
@@ -283,14 +248,6 @@ impl AreaLight {
                 }
                 let ql = sphere.world_from_object.inv_point(q).to_vec();
                 self.sphere_area_pdf(sphere, ql / ql.norm())
-            }
-            AreaShape::Parallelogram(par) => {
-                if self.rectangle {
-                    if let Some(sr) = warp::SphericalRectangle::new(p, par.p, par.v, par.w) {
-                        return 1.0 / sr.solid_angle();
-                    }
-                }
-                self.inv_area
             }
             _ => self.inv_area,
         };

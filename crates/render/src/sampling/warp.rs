@@ -4,7 +4,7 @@
 //! feed stratified or low-discrepancy samples. Directions are in a local frame whose +z axis is
 //! the normal; pdfs are per unit solid angle (directions) or per unit area (points).
 
-use crate::math::{safe_sqrt, Point2, Point3, Vec3, INV_2PI, INV_4PI, INV_PI, PI};
+use crate::math::{safe_sqrt, Point2, Vec3, INV_2PI, INV_4PI, INV_PI, PI};
 
 /// Uniform point on the unit disk by Shirley and Chiu's concentric map (low distortion).
 #[inline]
@@ -131,138 +131,6 @@ pub fn uniform_cone_pdf_narrow(one_minus_cos_max: f32) -> f32 {
 pub fn square_to_uniform_triangle(u: [f32; 2]) -> (f32, f32) {
     let su = u[0].sqrt();
     (1.0 - su, u[1] * su)
-}
-
-/// Smallest solid angle (sr) that [`SphericalRectangle`] samples; below it (and for points in
-/// the rectangle's plane) area sampling is as good, and callers fall back to it.
-pub const MIN_SPHERICAL_RECTANGLE: f64 = 1e-4;
-
-/// A rectangle as seen from a point, sampled uniformly by solid angle with the area-preserving
-/// parametrisation of Ureña, Fajardo and King (2013), "An Area-Preserving Parametrization for
-/// Spherical Rectangles". Computed in f64: the solid angle is a difference of angles near π,
-/// which f32 would cancel away. The density of [`SphericalRectangle::sample`] is
-/// 1 / [`SphericalRectangle::solid_angle`] over the directions to the rectangle.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SphericalRectangle {
-    x0: f64,
-    y0: f64,
-    z0: f64,
-    x1: f64,
-    y1: f64,
-    lx: f64,
-    ly: f64,
-    b0: f64,
-    b1: f64,
-    k: f64,
-    s: f64,
-}
-
-#[inline(always)]
-fn dot64(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-#[inline(always)]
-fn unit64(a: [f64; 3]) -> [f64; 3] {
-    let l = dot64(a, a).sqrt();
-    [a[0] / l, a[1] / l, a[2] / l]
-}
-
-impl SphericalRectangle {
-    /// The rectangle with corner `corner` and orthogonal edges `v`, `w` seen from `o`; `None`
-    /// when `o` lies in its plane, when the solid angle is below [`MIN_SPHERICAL_RECTANGLE`] or
-    /// when anything is not finite.
-    #[inline]
-    pub fn new(o: Point3, corner: Point3, v: Vec3, w: Vec3) -> Option<Self> {
-        let f = |a: Vec3| [a.x as f64, a.y as f64, a.z as f64];
-        let (v, w) = (f(v), f(w));
-        let (lx, ly) = (dot64(v, v).sqrt(), dot64(w, w).sqrt());
-        let ex = [v[0] / lx, v[1] / lx, v[2] / lx];
-        let ey = [w[0] / ly, w[1] / ly, w[2] / ly];
-        let ez = [
-            ex[1] * ey[2] - ex[2] * ey[1],
-            ex[2] * ey[0] - ex[0] * ey[2],
-            ex[0] * ey[1] - ex[1] * ey[0],
-        ];
-        let d = [
-            corner.x as f64 - o.x as f64,
-            corner.y as f64 - o.y as f64,
-            corner.z as f64 - o.z as f64,
-        ];
-        let (x0, y0) = (dot64(d, ex), dot64(d, ey));
-        // The rectangle below the point (z0 < 0): the axis z is flipped when it is above.
-        let z0 = -dot64(d, ez).abs();
-        if !(z0 < 0.0) {
-            return None;
-        }
-        let (x1, y1) = (x0 + lx, y0 + ly);
-        // The normals of the planes through the point and each edge.
-        let n0 = unit64([0.0, z0, -y0]);
-        let n1 = unit64([-z0, 0.0, x1]);
-        let n2 = unit64([0.0, -z0, y1]);
-        let n3 = unit64([z0, 0.0, -x0]);
-        let angle = |a: [f64; 3], b: [f64; 3]| (-dot64(a, b)).clamp(-1.0, 1.0).acos();
-        let (g0, g1, g2, g3) = (angle(n0, n1), angle(n1, n2), angle(n2, n3), angle(n3, n0));
-        let k = 2.0 * std::f64::consts::PI - g2 - g3;
-        let s = g0 + g1 - k;
-        (s >= MIN_SPHERICAL_RECTANGLE && s.is_finite()).then_some(Self {
-            x0,
-            y0,
-            z0,
-            x1,
-            y1,
-            lx,
-            ly,
-            b0: n0[2],
-            b1: n2[2],
-            k,
-            s,
-        })
-    }
-
-    /// The solid angle the rectangle subtends.
-    #[inline]
-    pub fn solid_angle(&self) -> f32 {
-        self.s as f32
-    }
-
-    /// The rectangle's point (as fractions (s, t) ∈ [0, 1]² of the edges `v`, `w`) whose
-    /// direction is uniform over the solid angle; `None` when not finite.
-    #[inline]
-    pub fn sample(&self, u: [f32; 2]) -> Option<(f32, f32)> {
-        let Self {
-            x0,
-            y0,
-            z0,
-            x1,
-            y1,
-            b0,
-            b1,
-            ..
-        } = *self;
-        // The x coordinate from the area of the spherical polygon left of it.
-        let au = u[0] as f64 * self.s + self.k;
-        let (sin_au, cos_au) = au.sin_cos();
-        let fu = (cos_au * b0 - b1) / sin_au;
-        let cu = (1.0 / (fu * fu + b0 * b0).sqrt())
-            .copysign(fu)
-            .clamp(-1.0 + 1e-15, 1.0 - 1e-15);
-        let xu = (-(cu * z0) / (1.0 - cu * cu).sqrt()).clamp(x0, x1);
-        // The y coordinate uniform in the sine of its elevation along that line.
-        let dd = (xu * xu + z0 * z0).sqrt();
-        let h0 = y0 / (dd * dd + y0 * y0).sqrt();
-        let h1 = y1 / (dd * dd + y1 * y1).sqrt();
-        let hv = h0 + u[1] as f64 * (h1 - h0);
-        let hv2 = hv * hv;
-        let yv = if hv2 < 1.0 - 1e-12 {
-            (hv * dd / (1.0 - hv2).sqrt()).clamp(y0, y1)
-        } else {
-            y1
-        };
-        let s = ((xu - x0) / self.lx).clamp(0.0, 1.0) as f32;
-        let t = ((yv - y0) / self.ly).clamp(0.0, 1.0) as f32;
-        (s.is_finite() && t.is_finite()).then_some((s, t))
-    }
 }
 
 /// The power heuristic (β = 2) weight of a strategy with pdf `f` (taking `nf` samples) against
