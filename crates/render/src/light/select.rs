@@ -256,7 +256,7 @@ impl LightSelector {
     /// Picks one of `lights` at `sp` with the uniform number `u`: its index, the probability
     /// of that choice and `u` rescaled to [0, 1) within the light's share. `None` when no
     /// light has any importance there.
-    #[inline]
+    #[inline(always)]
     pub fn pick(&self, lights: &[Light], sp: &ShadingPoint, u: f32) -> Option<(usize, f32, f32)> {
         let n = lights.len();
         if n == 0 {
@@ -271,6 +271,19 @@ impl LightSelector {
             };
             return Some((pick, 1.0 / n as f32, v));
         }
+        self.pick_by_importance(lights, sp, u)
+    }
+
+    /// [`LightSelector::pick`] by importance (kept out of line: the uniform choice of the
+    /// common one-light scene stays small where it is inlined).
+    #[inline(never)]
+    fn pick_by_importance(
+        &self,
+        lights: &[Light],
+        sp: &ShadingPoint,
+        u: f32,
+    ) -> Option<(usize, f32, f32)> {
+        let n = lights.len();
         let mut w = [0f32; MAX_IMPORTANCE_LIGHTS];
         let mut sum = 0.0;
         for (i, wi) in w.iter_mut().enumerate().take(n) {
@@ -300,12 +313,19 @@ impl LightSelector {
     }
 
     /// The probability with which [`LightSelector::pick`] chooses light `i` at `sp`.
-    #[inline]
+    #[inline(always)]
     pub fn pmf(&self, lights: &[Light], sp: &ShadingPoint, i: usize) -> f32 {
         let n = lights.len();
         if self.bounds.len() != n {
             return if n == 0 { 0.0 } else { 1.0 / n as f32 };
         }
+        self.pmf_by_importance(lights, sp, i)
+    }
+
+    /// [`LightSelector::pmf`] by importance (out of line, as [`LightSelector::pick`]'s).
+    #[inline(never)]
+    fn pmf_by_importance(&self, lights: &[Light], sp: &ShadingPoint, i: usize) -> f32 {
+        let n = lights.len();
         let mut sum = 0.0;
         let mut wi = 0.0;
         for j in 0..n {

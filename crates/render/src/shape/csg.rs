@@ -99,7 +99,7 @@ pub enum CsgNode {
 }
 
 /// Largest number of leaves of the expanded tree: hits name a leaf by its index below
-/// [`FLIP`].
+/// `FLIP` (2³¹).
 pub const MAX_EXPANDED_LEAVES: u64 = (FLIP - 1) as u64;
 
 /// Why a list of nodes is not a tree.
