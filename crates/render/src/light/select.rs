@@ -15,10 +15,13 @@
 //!   under a rectangle light and a constant sky: RMSE 0.0081 with the sky's share at π L,
 //!   0.0069 at a quarter of that, 0.0064 at 0, for fewer rays.) Alone in a scene they are
 //!   still sampled, as every single light is;
-//! - an emissive shape: the bound of pbrt-v4's `LightBounds::Importance` (power × the largest
-//!   cosine at the light × the largest cosine at the point / squared distance, the cosines
-//!   widened by the cone of directions the light's bounding sphere subtends), with the power
-//!   taken per side as L·A, so that it compares with the lights above.
+//! - an emissive shape: its power per side over π (L·A, comparable with the irradiances above)
+//!   over the squared distance to its centre (at least its bounding sphere's squared radius),
+//!   and 0 where it cannot reach the point: a one-sided planar light seen from behind, a light
+//!   whose bounding sphere lies below a reflecting surface's tangent plane. No square root: the
+//!   cosine bounds of pbrt-v4's `LightBounds::Importance` (tried first) cost about 20 ns per
+//!   light and vertex, which on a Cornell box with three rectangle lights made the frame 56 %
+//!   slower for 12 % less variance.
 //!
 //! The cosine at the point is taken on the side of the outgoing direction when the BSDF only
 //! reflects, and on either side otherwise. A light of importance 0 is never sampled; that costs
@@ -34,7 +37,7 @@ use crate::sampling::sampler::ONE_MINUS_EPSILON;
 
 /// Most lights whose importance is evaluated one by one at every shading point; scenes with
 /// more lights choose uniformly.
-pub const MAX_IMPORTANCE_LIGHTS: usize = 32;
+pub const MAX_IMPORTANCE_LIGHTS: usize = 8;
 
 /// A shading point as light selection and light sampling see it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,8 +89,9 @@ enum Bound {
         radius2: f32,
         /// Axis of the cone bounding its normals.
         axis: Vec3,
-        /// Cosine of that cone's half-angle (1: one normal; −1: every direction).
-        cos_o: f32,
+        /// The shape is planar (every normal is `axis`); otherwise its normals may point
+        /// anywhere.
+        planar: bool,
         /// Emits on both sides.
         two_sided: bool,
         /// Power per side over π: L·A.
@@ -101,31 +105,6 @@ enum Bound {
 pub struct LightSelector {
     /// One bound per light; empty for the uniform choice.
     bounds: Vec<Bound>,
-}
-
-/// cos(θa − θb) clamped to 1 when θa < θb (pbrt-v4's `cosSubClamped`).
-#[inline(always)]
-fn cos_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
-    if cos_a > cos_b {
-        1.0
-    } else {
-        cos_a * cos_b + sin_a * sin_b
-    }
-}
-
-/// sin(θa − θb) clamped to 0 when θa < θb (pbrt-v4's `sinSubClamped`).
-#[inline(always)]
-fn sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
-    if cos_a > cos_b {
-        0.0
-    } else {
-        sin_a * cos_b - cos_a * sin_b
-    }
-}
-
-#[inline(always)]
-fn safe_sqrt(x: f32) -> f32 {
-    x.max(0.0).sqrt()
 }
 
 impl LightSelector {
@@ -146,18 +125,18 @@ impl LightSelector {
                 Light::Area(a) => {
                     let e = &emissions[a.emission as usize];
                     let phi = e.radiance.average().average() * a.area;
-                    let (b, axis, cos_o) = match &a.shape {
-                        AreaShape::Parallelogram(q) => (q.bounds(), q.normal().to_vec(), 1.0),
+                    let (b, axis, planar) = match &a.shape {
+                        AreaShape::Parallelogram(q) => (q.bounds(), q.normal().to_vec(), true),
                         AreaShape::Disk(d) => (
                             d.bounds(),
                             d.world_from_object
                                 .normal(Vec3::Z.to_normal())
                                 .to_vec()
                                 .normalize(),
-                            1.0,
+                            true,
                         ),
-                        AreaShape::Sphere { sphere, .. } => (sphere.bounds(), Vec3::Z, -1.0),
-                        AreaShape::Cube { cube, .. } => (cube.bounds(), Vec3::Z, -1.0),
+                        AreaShape::Sphere { sphere, .. } => (sphere.bounds(), Vec3::Z, false),
+                        AreaShape::Cube { cube, .. } => (cube.bounds(), Vec3::Z, false),
                         AreaShape::Mesh { mesh, .. } => {
                             let m = &geometry.meshes()[*mesh as usize];
                             let first = m.positions.first().copied().unwrap_or(Point3::ORIGIN);
@@ -165,7 +144,7 @@ impl LightSelector {
                                 .positions
                                 .iter()
                                 .fold(Bounds3::point(first), |b, &p| b.union_point(p));
-                            (b, Vec3::Z, -1.0)
+                            (b, Vec3::Z, false)
                         }
                     };
                     let d = b.diagonal();
@@ -174,7 +153,7 @@ impl LightSelector {
                         centre: b.centroid(),
                         radius2: 0.25 * d.squared_norm(),
                         axis,
-                        cos_o,
+                        planar,
                         two_sided: e.two_sided,
                         phi: if ok { phi.max(0.0) } else { 0.0 },
                     }
@@ -213,37 +192,22 @@ impl LightSelector {
                 centre,
                 radius2,
                 axis,
-                cos_o,
+                planar,
                 two_sided,
                 phi,
             } => {
                 let to = centre - sp.p;
                 let d2 = to.squared_norm();
-                // Inside the bounding sphere every direction may reach the light.
-                let (sin_b, cos_b) = if d2 > radius2 {
-                    let s2 = radius2 / d2;
-                    (s2.sqrt(), safe_sqrt(1.0 - s2))
+                // A one-sided planar light seen from behind sends nothing; nor does a light
+                // whose bounding sphere lies below a reflecting surface's tangent plane.
+                let h = sp.n.dot(to);
+                if (planar && !two_sided && axis.dot(to) >= 0.0)
+                    || (sp.reflect_only && h < 0.0 && h * h > radius2)
+                {
+                    0.0
                 } else {
-                    (1.0, -1.0)
-                };
-                let wi = to / d2.sqrt();
-                // The angle between the cone's axis and the direction from the light.
-                let mut cos_w = -axis.dot(wi);
-                if two_sided {
-                    cos_w = cos_w.abs();
+                    phi / d2.max(radius2)
                 }
-                let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-                let sin_o = safe_sqrt(1.0 - cos_o * cos_o);
-                let cos_x = cos_sub(sin_w, cos_w, sin_o, cos_o);
-                let sin_x = sin_sub(sin_w, cos_w, sin_o, cos_o);
-                let cos_light = cos_sub(sin_x, cos_x, sin_b, cos_b);
-                if !(cos_light > 0.0) {
-                    return 0.0;
-                }
-                let cos_i = sp.cos(wi).clamp(-1.0, 1.0);
-                let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
-                let cos_surface = cos_sub(sin_i, cos_i, sin_b, cos_b);
-                phi * cos_light * cos_surface / d2.max(radius2)
             }
         };
         if v > 0.0 && v.is_finite() {
