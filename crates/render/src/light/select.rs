@@ -1,7 +1,7 @@
 //! Which light next-event estimation samples at a shading point.
 //!
-//! In scenes with up to [`MAX_IMPORTANCE_LIGHTS`] lights, every light's *importance* at the
-//! shading point is evaluated and one light is picked in proportion to it, by inverting the
+//! In scenes with up to [`MAX_IMPORTANCE_LIGHTS`] lights, not all of them emissive shapes,
+//! every light's *importance* at the shading point is evaluated and one light is picked in proportion to it, by inverting the
 //! cumulative sum with the light sample's first number (which is then rescaled, so that each
 //! light keeps a stratified share of the pixel's samples). The importance estimates the
 //! unshadowed irradiance the light delivers:
@@ -26,7 +26,7 @@
 //! The cosine at the point is taken on the side of the outgoing direction when the BSDF only
 //! reflects, and on either side otherwise. A light of importance 0 is never sampled; that costs
 //! no bias because multiple importance sampling then gives BSDF sampling its full weight. With
-//! more lights, or one, the choice is uniform. [`LightSelector::pmf`] recomputes the
+//! more lights, one light, or emissive shapes alone, the choice is uniform. [`LightSelector::pmf`] recomputes the
 //! probability with which the vertex a path left picked a light, for the MIS weights of emitters
 //! that BSDF sampling finds.
 
@@ -110,7 +110,11 @@ pub struct LightSelector {
 impl LightSelector {
     /// The selector for `lights` (with the emissions and geometry of their shapes).
     pub fn new(lights: &[Light], emissions: &[Emission], geometry: &Geometry) -> Self {
-        if lights.len() <= 1 || lights.len() > MAX_IMPORTANCE_LIGHTS {
+        // Emissive shapes alone are chosen uniformly: their importance did not pay for its
+        // cost (Cornell boxes with two and three rectangle lights: 1 % and 25 % less variance
+        // for 25 % and 37 % more time).
+        let shapes_only = lights.iter().all(|l| matches!(l, Light::Area(_)));
+        if lights.len() <= 1 || lights.len() > MAX_IMPORTANCE_LIGHTS || shapes_only {
             return Self::default();
         }
         let bounds = lights
