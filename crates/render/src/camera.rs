@@ -16,7 +16,7 @@
 //! eye perpendicular to the view axis, and passes through the point where the pinhole ray meets
 //! the plane in focus, so that only that plane is sharp.
 
-use crate::math::{Point3, Ray, Transform, Vec3};
+use crate::math::{Point3, Ray, Transform, Vec3, BATCH};
 use crate::sampling::warp::square_to_concentric_disk;
 
 /// A thin lens, in the units of the camera's frame.
@@ -103,6 +103,36 @@ impl Camera {
         Ray::new(t.point(o), t.vector(d).normalize())
     }
 
+    /// [`Camera::ray`] for each point `uv[k]` of the screen, into `rays[k]` (a camera without
+    /// a lens): the same rays, bit for bit, with the pinhole's position computed once and the
+    /// directions lane by lane in arrays the compiler vectorises.
+    pub fn rays(&self, uv: &[[f32; 2]; BATCH], n: usize, rays: &mut [Ray]) {
+        debug_assert!(self.lens.is_none() && n <= BATCH && n <= rays.len());
+        let Projection::Perspective { distance } = self.projection else {
+            for (r, &[u, v]) in rays.iter_mut().zip(uv).take(n) {
+                *r = self.ray(u, v);
+            }
+            return;
+        };
+        let t = &self.world_from_camera;
+        let o = t.point(Point3::new(-distance, 0.0, 0.0));
+        let m = &t.m.m;
+        let (mut x, mut y, mut z) = ([0f32; BATCH], [0f32; BATCH], [0f32; BATCH]);
+        for k in 0..BATCH {
+            let sy = (1.0 - 2.0 * uv[k][0]) * self.aspect_ratio;
+            let sz = 2.0 * uv[k][1] - 1.0;
+            // Transform::vector and Vec3::normalize, written out over the lanes.
+            let dx = m[0][0] * distance + m[0][1] * sy + m[0][2] * sz;
+            let dy = m[1][0] * distance + m[1][1] * sy + m[1][2] * sz;
+            let dz = m[2][0] * distance + m[2][1] * sy + m[2][2] * sz;
+            let inv = 1.0 / (dx * dx + dy * dy + dz * dz).sqrt();
+            (x[k], y[k], z[k]) = (dx * inv, dy * inv, dz * inv);
+        }
+        for k in 0..n {
+            rays[k] = Ray::new(o, Vec3::new(x[k], y[k], z[k]));
+        }
+    }
+
     /// The same camera with a thin lens (perspective cameras only; others stay as they are).
     pub fn with_lens(self, lens: Lens) -> Self {
         match self.projection {
@@ -140,6 +170,41 @@ pub fn distance_for_fov(fov_deg: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A batch of pinhole rays is [`Camera::ray`] lane by lane, bit for bit, for both
+    /// projections and a partial batch.
+    #[test]
+    fn batched_rays_are_the_single_rays() {
+        let place = Transform::look_at(
+            Point3::new(0.3, 3.5, 8.5),
+            Point3::new(0.0, 0.5, 0.1),
+            Vec3::new(0.0, 1.0, 0.0),
+        )
+        .unwrap();
+        let mut uv = [[0f32; 2]; BATCH];
+        for (k, p) in uv.iter_mut().enumerate() {
+            *p = [
+                (k as f32 * 0.37 + 0.01).fract(),
+                (k as f32 * 0.61 + 0.3).fract(),
+            ];
+        }
+        for cam in [
+            Camera::perspective_fov(50.0, 1.3, place),
+            Camera::orthogonal(0.8, place),
+        ] {
+            for n in [BATCH, 5] {
+                let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
+                cam.rays(&uv, n, &mut rays);
+                for k in 0..n {
+                    let one = cam.ray(uv[k][0], uv[k][1]);
+                    assert_eq!(rays[k].o, one.o, "{k}");
+                    let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+                    assert_eq!(bits(rays[k].d), bits(one.d), "{k}");
+                    assert_eq!((rays[k].tmin, rays[k].tmax), (one.tmin, one.tmax));
+                }
+            }
+        }
+    }
 
     /// Every ray of a thin lens for one screen point starts on the aperture disk (radius 0.2
     /// around the eye, across the view axis) and passes through the one point where the pinhole

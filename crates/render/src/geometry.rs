@@ -16,6 +16,10 @@ use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::math::{Bounds3, Ray, Transform};
 use crate::shape::{Mesh, Shape, ShapeHit, ShearedRay};
 
+/// Geometries of at least this many primitives prefetch what shading their hits reads
+/// ([`Geometry::prefetch_interactions`]); smaller ones stay in the caches.
+pub const PREFETCH_PRIMS: usize = 1 << 15;
+
 /// A placement of a shared group of shapes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Instance {
@@ -219,9 +223,51 @@ impl Geometry {
         (0..self.instances.len() as u32).fold(own, |b, i| b.union(self.instance_bounds(i)))
     }
 
+    /// Starts loading what [`Geometry::interaction`] reads for the hits in `lanes` (bit i:
+    /// `hits[i]`), in stages over all of them, so that their cache misses overlap rather than
+    /// come one after another as each interaction is computed. Only triangles need it (their
+    /// primitive record, then their indices, then their vertices), and only in geometries too
+    /// large for the caches ([`PREFETCH_PRIMS`] primitives or more).
+    #[inline]
+    pub fn prefetch_interactions(&self, hits: &[Option<Hit>], lanes: u32) {
+        if self.prims.len() < PREFETCH_PRIMS {
+            return;
+        }
+        let prims = || {
+            hits.iter()
+                .enumerate()
+                .filter(move |(i, _)| lanes >> i & 1 != 0)
+                .filter_map(|(_, h)| h.as_ref().map(|h| h.prim as usize))
+        };
+        for p in prims() {
+            if let Some(r) = self.prims.get(p) {
+                crate::simd::prefetch(r);
+            }
+        }
+        for p in prims() {
+            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p) {
+                if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
+                    crate::simd::prefetch(ix);
+                }
+            }
+        }
+        for p in prims() {
+            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p) {
+                self.meshes[mesh as usize].prefetch_vertices(tri);
+            }
+        }
+    }
+
     /// The full interaction for a hit found along `ray`.
     #[inline(always)]
     pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        self.interaction_with(ray, hit, true)
+    }
+
+    /// [`Geometry::interaction`], with texture coordinates only when `uv`: shapes whose
+    /// coordinates cost something to compute (spheres) leave them at zero otherwise.
+    #[inline]
+    pub fn interaction_with(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfaceInteraction {
         let sh = ShapeHit {
             t: hit.t,
             uv: hit.uv,
@@ -244,6 +290,7 @@ impl Geometry {
                         obj.props,
                         Some(c.face_frame(sh.sub)),
                     ),
+                    Shape::Sphere(s) if !uv => (s.geometry_without_uv(ray, sh.t), obj.props, None),
                     shape => (
                         shape.geometry(ray, &sh),
                         shape.hit_props(&sh).unwrap_or(obj.props),

@@ -19,6 +19,7 @@ pub mod interaction;
 pub mod light;
 pub mod material;
 pub mod math;
+pub(crate) mod mem;
 pub mod radiosity;
 pub mod render;
 pub mod sampling;

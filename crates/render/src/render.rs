@@ -16,7 +16,7 @@ use crate::aov::{aov_sample, emission_aa as emission_aa_of, near_light_edge, Aov
 use crate::film::{to_fixed, Film, Window};
 use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
-use crate::integrator::{Integrator, SampleBatch};
+use crate::integrator::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::math::{Point3, Ray, Vec3, BATCH};
 use crate::sampling::pcg::{hash2, unit_pair};
 use crate::sampling::{Sampler, SamplerKind};
@@ -217,21 +217,33 @@ fn render_pixel(
         (y * settings.width + x) as u64,
         settings.spp,
     );
-    sampler.draw_until(last);
+    sampler.draw_range(first, last);
     let mut sum = [0i128; 3];
-    // The samples go to the integrator in groups of `BATCH`, traced side by side; each keeps
-    // its own place in the pixel's sample sequence.
-    let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); BATCH];
-    let mut cursors = [sampler.cursor(); BATCH];
-    let mut radiance = [SampledSpectrum::ZERO; BATCH];
-    let mut weights = [1f32; BATCH];
-    let mut lambdas = [Wavelengths::Rgb; BATCH];
+    // The samples go to the integrator up to `SAMPLE_QUEUE` at a time (never across a multiple
+    // of it, where the sampler's tables start over), traced side by side; each keeps its own
+    // place in the pixel's sample sequence.
+    const QUEUE: u32 = SAMPLE_QUEUE as u32;
+    let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); SAMPLE_QUEUE];
+    let mut cursors = [sampler.cursor(); SAMPLE_QUEUE];
+    let mut radiance = [SampledSpectrum::ZERO; SAMPLE_QUEUE];
+    let mut weights = [1f32; SAMPLE_QUEUE];
+    let mut lambdas = [Wavelengths::Rgb; SAMPLE_QUEUE];
     let spectral = settings.spectral && integrator.spectral();
-    for start in (first..last).step_by(BATCH) {
-        let n = (last - start).min(BATCH as u32) as usize;
+    // A pinhole's rays are made a batch at a time, from their screen points.
+    let pinhole = scene.camera.lens.is_none();
+    let mut screen = [[0f32; 2]; SAMPLE_QUEUE];
+    let mut start = first;
+    while start < last {
+        let n = (last.min((start / QUEUE + 1) * QUEUE) - start) as usize;
         for k in 0..n {
-            (rays[k], weights[k]) =
-                camera_ray(scene, (w, h), (x, y), start + k as u32, (sampler, filter));
+            if pinhole {
+                let offset;
+                (offset, weights[k]) = filter.sample(sampler.pixel_sample(start + k as u32));
+                screen[k] = screen_point((w, h), (x, y), offset);
+            } else {
+                (rays[k], weights[k]) =
+                    camera_ray(scene, (w, h), (x, y), start + k as u32, (sampler, filter));
+            }
             // The sample's wavelengths: the number after the camera's.
             lambdas[k] = if spectral {
                 Wavelengths::sample(sampler.next_1d())
@@ -239,6 +251,12 @@ fn render_pixel(
                 Wavelengths::Rgb
             };
             cursors[k] = sampler.cursor();
+        }
+        if pinhole {
+            for c in (0..n).step_by(BATCH) {
+                let batch: &[[f32; 2]; BATCH] = screen[c..c + BATCH].try_into().unwrap();
+                scene.camera.rays(batch, (n - c).min(BATCH), &mut rays[c..]);
+            }
         }
         let batch = SampleBatch {
             rays: &rays[..n],
@@ -258,6 +276,7 @@ fn render_pixel(
                 stats.rejected_samples += 1;
             }
         }
+        start += n as u32;
     }
     (sum, last.saturating_sub(first))
 }
@@ -308,12 +327,18 @@ fn ray_through(
     [sx, sy]: [f32; 2],
     lens: impl FnOnce() -> [f32; 2],
 ) -> Ray {
-    let u = (x as f32 + sx) / w;
-    let v = 1.0 - (y as f32 + sy) / h;
+    let [u, v] = screen_point((w, h), (x, y), [sx, sy]);
     match scene.camera.lens {
         None => scene.camera.ray(u, v),
         Some(_) => scene.camera.ray_through_lens(u, v, lens()),
     }
+}
+
+/// The point (u, v) of the screen square at `offset` (in pixels from the corner) in pixel
+/// (x, y) of a `w × h` image (v upwards).
+#[inline(always)]
+fn screen_point((w, h): (f32, f32), (x, y): (usize, usize), [sx, sy]: [f32; 2]) -> [f32; 2] {
+    [(x as f32 + sx) / w, 1.0 - (y as f32 + sy) / h]
 }
 
 /// Appends to `sums` the fixed-point sums of the output variables of samples `first..last` of

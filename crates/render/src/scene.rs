@@ -43,6 +43,9 @@ pub struct Scene {
     pub ambient: Rgb,
     /// True when a material has a stochastic opacity (see [`Material::opacity`]).
     pub has_masks: bool,
+    /// True when a material's or emitter's texture varies over a surface: only then do
+    /// [`Scene::interaction`]s carry texture coordinates (see [`Material::reads_uv`]).
+    pub reads_uv: bool,
 }
 
 /// The most masked surfaces a ray passes through before the next one counts as a hit.
@@ -311,6 +314,13 @@ impl Scene {
         &self.materials[si.props.material as usize]
     }
 
+    /// The surface at `hit` along `ray`, for shading: texture coordinates are left at zero
+    /// when nothing in the scene reads them ([`Scene::reads_uv`]).
+    #[inline]
+    pub fn interaction(&self, ray: &Ray, hit: &Hit) -> SurfaceInteraction {
+        self.geometry.interaction_with(ray, hit, self.reads_uv)
+    }
+
     /// The radiance emitted by the surface of `si` back along the ray, in the lanes of
     /// `lambda`.
     #[inline]
@@ -533,6 +543,8 @@ impl SceneBuilder {
         let accel = Accel::build(accel, &geometry);
         let has_masks = self.materials.iter().any(|m| m.opacity.is_some());
         let light_selector = LightSelector::new(&self.lights, &self.emissions, &geometry);
+        let reads_uv = self.materials.iter().any(Material::reads_uv)
+            || self.emissions.iter().any(|e| !e.radiance.is_constant());
         Scene {
             camera: self
                 .camera
@@ -550,6 +562,7 @@ impl SceneBuilder {
             lights: self.lights,
             ambient: self.ambient,
             has_masks,
+            reads_uv,
         }
     }
 }
@@ -610,6 +623,50 @@ mod tests {
             .interact(&Ray::new(Point3::ORIGIN, Vec3::Z), &mut st)
             .is_none());
         assert_eq!(st.rays, 4);
+    }
+
+    /// Shading interactions leave texture coordinates out only when no texture reads them:
+    /// the rest of the surface is the same bit for bit, and a checkered sphere keeps them.
+    #[test]
+    fn texture_coordinates_only_where_read() {
+        let plain = two_spheres_and_a_plane();
+        assert!(!plain.reads_uv);
+        let ray = Ray::new(Point3::new(5.3, 0.4, 3.0), Vec3::new(0.0, 0.0, -1.0));
+        let hit = plain.intersect(&ray, &mut RayStats::default()).unwrap();
+        let (full, lazy) = (
+            plain.geometry.interaction(&ray, &hit),
+            plain.interaction(&ray, &hit),
+        );
+        assert_eq!((lazy.uv.x, lazy.uv.y), (0.0, 0.0));
+        assert!(full.uv.x > 0.0 && full.uv.y > 0.0);
+        assert_eq!(
+            (lazy.p, lazy.n, lazy.ns, lazy.dpdu, lazy.wo, lazy.t),
+            (full.p, full.n, full.ns, full.dpdu, full.wo, full.t)
+        );
+
+        let mut b = SceneBuilder::new();
+        let checker = Texture::Checkered {
+            c1: Rgb::WHITE,
+            c2: Rgb::BLACK,
+            steps: [4.0, 4.0],
+            offset: [0.0, 0.0],
+        };
+        let m = b.add_material(Material::diffuse(checker));
+        b.add_shape(
+            Shape::Sphere(Sphere::new(Transform::translation(Vec3::new(
+                5.3, 0.0, 0.0,
+            )))),
+            m,
+            None,
+        );
+        let textured = b.build(AccelKind::None);
+        assert!(textured.reads_uv);
+        let hit = textured.intersect(&ray, &mut RayStats::default()).unwrap();
+        let (full, lazy) = (
+            textured.geometry.interaction(&ray, &hit),
+            textured.interaction(&ray, &hit),
+        );
+        assert_eq!((lazy.uv.x, lazy.uv.y), (full.uv.x, full.uv.y));
     }
 
     #[test]

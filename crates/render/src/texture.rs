@@ -146,10 +146,18 @@ impl Texture {
     #[inline(always)]
     pub fn spectral(&self, uv: Point2, w: &Wavelengths, role: RgbRole) -> SampledSpectrum {
         match (self, w) {
-            (_, Wavelengths::Rgb) => SampledSpectrum::from_rgb(self.eval(uv)),
+            // Read straight from the texture: a colour merged from the two arms of `eval`
+            // goes through the stack, in pieces a whole-vector load cannot be forwarded from.
+            (Texture::Uniform(c), Wavelengths::Rgb) => SampledSpectrum::from_rgb(*c),
+            (_, Wavelengths::Rgb) => SampledSpectrum::from_rgb(self.eval_varying(uv)),
             (Texture::Spectral { spectrum, .. }, Wavelengths::Sampled(s)) => spectrum.eval4(s),
             _ => w.colour(self.eval(uv), role),
         }
+    }
+
+    /// True when the texture is the same everywhere (it never reads texture coordinates).
+    pub fn is_constant(&self) -> bool {
+        matches!(self, Texture::Uniform(_) | Texture::Spectral { .. })
     }
 
     /// A spectrum as a texture (`rgb`: its colour in RGB mode).

@@ -249,6 +249,17 @@ impl Accel {
         }
     }
 
+    /// True when a batch of rays costs as much with a few active lanes as with all of them
+    /// (a small scene's BVH tests every primitive against every lane at once), so that a lane
+    /// whose path ends is best given the next sample at once. A large scene's BVH traces a
+    /// batch of coherent camera rays as one packet: its batches start together.
+    pub fn refills_lanes(&self) -> bool {
+        match self {
+            Accel::Bvh(b) => b.is_flat(),
+            _ => true,
+        }
+    }
+
     /// The active lanes of `rays` that hit anything (bit i for lane i).
     pub fn occluded_batch(
         &self,

@@ -43,8 +43,7 @@ pub trait Integrator: Sync {
         true
     }
 
-    /// The radiance along each of `rays` (at most [`crate::math::BATCH`]), samples of one
-    /// pixel: ray i, in the lanes of `lambdas[i]`, continues the sample at `cursors[i]` (left
+    /// The radiance along each of `rays` (at most [`SAMPLE_QUEUE`]), samples of one pixel: ray i, in the lanes of `lambdas[i]`, continues the sample at `cursors[i]` (left
     /// at its end) and its radiance goes to `out[i]`. Each result equals what
     /// [`Integrator::radiance`] gives for that ray and sample alone; integrators that can trace
     /// paths side by side do so.
@@ -64,11 +63,15 @@ pub trait Integrator: Sync {
     }
 }
 
+/// The most samples of a pixel handed to [`Integrator::radiance_batch`] at once: four batches,
+/// the samples whose numbers a pixel sampler tabulates together.
+pub const SAMPLE_QUEUE: usize = 4 * crate::math::BATCH;
+
 /// Samples of one pixel traced side by side: sample i has the camera ray `rays[i]`, the
 /// wavelengths `lambdas[i]` (left as the path ends them) and its place in the pixel's sample
 /// sequence `cursors[i]` (left at the sample's end).
 pub struct SampleBatch<'a> {
-    /// The camera rays (at most [`crate::math::BATCH`]).
+    /// The camera rays (at most [`SAMPLE_QUEUE`]).
     pub rays: &'a [Ray],
     /// What each path's lanes mean.
     pub lambdas: &'a mut [Wavelengths],

@@ -8,10 +8,10 @@
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
 //! (The course's branching estimator is [`super::CoursePath`].)
 
-use super::{Integrator, SampleBatch};
+use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
-use crate::math::{Ray, RayBatch, BATCH};
+use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -126,7 +126,7 @@ impl Path {
             }
             return done;
         };
-        let si = scene.geometry.interaction(&st.ray, &hit);
+        let si = scene.interaction(&st.ray, &hit);
 
         // Emission found by BSDF sampling (or by the camera).
         if st.depth > 0 || !self.hide_emitters {
@@ -266,10 +266,13 @@ impl Integrator for Path {
         }
     }
 
-    /// Up to [`BATCH`] paths side by side: their rays are traced together (small scenes test
-    /// each primitive against all of them at once), their vertices shaded one by one, each
-    /// drawing from its own sample's cursor. Every path gets the radiance
-    /// [`Integrator::radiance`] gives it alone, bit for bit.
+    /// [`BATCH`] paths side by side: their rays are traced together (small scenes test each
+    /// primitive against all of them at once), their vertices shaded one by one, each drawing
+    /// from its own sample's cursor. Where a batch costs the same however few of its lanes are
+    /// active ([`crate::accel::Accel::refills_lanes`]), a lane whose path ends takes the next
+    /// sample at once; otherwise the samples go sixteen at a time, so that camera rays start
+    /// together (and large scenes trace them as packets). Every path gets the radiance
+    /// [`Integrator::radiance`] gives it alone, bit for bit, whatever lane it runs in.
     fn radiance_batch(
         &self,
         scene: &Scene,
@@ -284,35 +287,52 @@ impl Integrator for Path {
             cursors,
         } = batch;
         let n = rays.len();
-        debug_assert!(n <= BATCH && cursors.len() == n && out.len() >= n);
+        debug_assert!(n <= SAMPLE_QUEUE && cursors.len() == n && out.len() >= n);
+        let refill = scene.accel.refills_lanes();
         let unused = Ray::new(crate::math::Point3::ORIGIN, crate::math::Vec3::X);
         let mut st = [PathState::new(&unused, Wavelengths::Rgb); BATCH];
-        for ((s, r), lambda) in st.iter_mut().zip(rays).zip(lambdas.iter()) {
-            *s = PathState::new(r, *lambda);
-        }
-        let mut alive: u32 = (1u32 << n) - 1;
+        // The sample each lane traces, and the next sample to start.
+        let mut slot = [0usize; BATCH];
+        let mut next = 0;
+        let mut alive: u32 = 0;
         let mut hits = [None; BATCH];
         let mut pending = [SampledSpectrum::ZERO; BATCH];
         // Only the active lanes are read: the batches are filled, not cleared, at each step.
         let mut batch = RayBatch::default();
         let mut shadows = RayBatch::default();
-        while alive != 0 {
+        loop {
+            if alive == 0 {
+                if next == n {
+                    break;
+                }
+                // A fresh batch: the next samples, in order, from lane 0.
+                let m = (n - next).min(BATCH);
+                for i in 0..m {
+                    st[i] = PathState::new(&rays[next + i], lambdas[next + i]);
+                    slot[i] = next + i;
+                }
+                next += m;
+                alive = (1u32 << m) - 1;
+            }
             batch.active = 0;
             for i in lanes(alive) {
                 batch.set(i, &st[i].ray);
             }
             scene.intersect_batch(&batch, &mut hits, stats);
+            scene.geometry.prefetch_interactions(&hits, alive);
             shadows.active = 0;
+            let mut ended = 0u32;
             for i in lanes(alive) {
-                sampler.resume(cursors[i]);
+                let s = slot[i];
+                sampler.resume(cursors[s]);
                 let o = self.vertex(scene, &mut st[i], hits[i], sampler);
-                cursors[i] = sampler.cursor();
+                cursors[s] = sampler.cursor();
                 if let Some((ray, c)) = o.shadow {
                     shadows.set(i, &ray);
                     pending[i] = c;
                 }
                 if !o.alive {
-                    alive &= !(1 << i);
+                    ended |= 1 << i;
                 }
             }
             if shadows.active != 0 {
@@ -321,22 +341,17 @@ impl Integrator for Path {
                     st[i].l += pending[i];
                 }
             }
-        }
-        for i in 0..n {
-            out[i] = st[i].l;
-            lambdas[i] = st[i].lambda;
+            alive &= !ended;
+            for i in lanes(ended) {
+                out[slot[i]] = st[i].l;
+                lambdas[slot[i]] = st[i].lambda;
+                if refill && next < n {
+                    st[i] = PathState::new(&rays[next], lambdas[next]);
+                    slot[i] = next;
+                    next += 1;
+                    alive |= 1 << i;
+                }
+            }
         }
     }
-}
-
-/// The set bits of `m`, lowest first.
-#[inline(always)]
-fn lanes(mut m: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (m != 0).then(|| {
-            let i = m.trailing_zeros() as usize;
-            m &= m - 1;
-            i
-        })
-    })
 }

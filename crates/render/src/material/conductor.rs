@@ -47,6 +47,25 @@ pub fn microfacet_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> f32 {
     mf.pdf(wo, h) / (4.0 * d)
 }
 
+/// [`microfacet_lobe`] and [`microfacet_pdf`] of one pair at once, sharing the half vector,
+/// D(h) and G1(wo, h): the same numbers, bit for bit, as the two calls.
+#[inline]
+pub fn microfacet_lobe_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> (Option<(f32, Vec3)>, f32) {
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return (None, 0.0);
+    }
+    let h = (wo + wi).normalize();
+    let d = mf.d(h);
+    let g1o = mf.g1(wo, h);
+    let v = d * (g1o * mf.g1(wi, h)) / (4.0 * wo.z);
+    let lobe = (v > 0.0 && v.is_finite()).then_some((v, h));
+    let cos_oh = wo.dot(h);
+    if cos_oh <= 0.0 {
+        return (lobe, 0.0);
+    }
+    (lobe, mf.pdf_with(wo, h, d, g1o) / (4.0 * cos_oh))
+}
+
 /// f·cos θi.
 pub fn eval(
     mf: &Microfacet,
@@ -55,7 +74,18 @@ pub fn eval(
     wo: Vec3,
     wi: Vec3,
 ) -> SampledSpectrum {
-    match microfacet_lobe(mf, wo, wi) {
+    value(c, r, wo, microfacet_lobe(mf, wo, wi))
+}
+
+/// f·cos θi given the lobe at the pair ([`microfacet_lobe`]).
+#[inline(always)]
+fn value(
+    c: Option<(SampledSpectrum, SampledSpectrum)>,
+    r: SampledSpectrum,
+    wo: Vec3,
+    lobe: Option<(f32, Vec3)>,
+) -> SampledSpectrum {
+    match lobe {
         Some((v, h)) => r * conductor_fresnel(c, wo.dot(h)) * v,
         None => SampledSpectrum::ZERO,
     }
@@ -74,5 +104,6 @@ pub fn sample(
     }
     let m = mf.sample(wo, u);
     let wi = reflect(wo, m);
-    reflection_sample(wi, microfacet_pdf(mf, wo, wi), eval(mf, c, r, wo, wi))
+    let (lobe, pdf) = microfacet_lobe_pdf(mf, wo, wi);
+    reflection_sample(wi, pdf, value(c, r, wo, lobe))
 }

@@ -119,6 +119,21 @@ impl Microfacet {
             Distribution::Beckmann => self.d(m) * m.z.max(0.0),
         }
     }
+
+    /// [`Microfacet::pdf`] given `d` = D(m) and `g1` = G1(wi, m), already computed: the same
+    /// number, bit for bit.
+    #[inline]
+    pub fn pdf_with(&self, wi: Vec3, m: Vec3, d: f32, g1: f32) -> f32 {
+        match self.dist {
+            Distribution::Ggx => {
+                if wi.z <= 0.0 {
+                    return 0.0;
+                }
+                g1 * wi.dot(m).max(0.0) * d / wi.z
+            }
+            Distribution::Beckmann => d * m.z.max(0.0),
+        }
+    }
 }
 
 /// Heitz 2018, "Sampling the GGX Distribution of Visible Normals".

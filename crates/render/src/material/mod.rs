@@ -268,6 +268,33 @@ impl Material {
         }
     }
 
+    /// True when a texture of the material (its opacity included) varies over the surface,
+    /// so that its hits need texture coordinates.
+    pub fn reads_uv(&self) -> bool {
+        let varies = |t: &Texture| !t.is_constant();
+        let model = match &self.model {
+            Model::Diffuse { reflectance } | Model::Specular { reflectance } => varies(reflectance),
+            Model::Phong { kd, ks, .. }
+            | Model::CookTorrance { kd, ks, .. }
+            | Model::Plastic { kd, ks, .. }
+            | Model::RoughPlastic { kd, ks, .. } => varies(kd) || varies(ks),
+            Model::Dielectric {
+                reflectance,
+                transmittance,
+                ..
+            } => varies(reflectance) || varies(transmittance),
+            Model::Conductor {
+                eta_k, reflectance, ..
+            } => {
+                varies(reflectance)
+                    || eta_k
+                        .as_ref()
+                        .is_some_and(|(eta, k)| varies(eta) || varies(k))
+            }
+        };
+        model || self.opacity.as_ref().is_some_and(varies)
+    }
+
     /// Readies the material for spectral rendering: uniform colours are upsampled once, here,
     /// rather than at every hit (see [`Texture::prepare_spectral`]).
     pub fn prepare_spectral(&mut self) {

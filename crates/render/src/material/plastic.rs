@@ -13,7 +13,7 @@
 //! refracted direction (so light lost to masking is not transmitted), and the internal
 //! reflectance from the coating's directional albedo seen from inside.
 
-use super::conductor::{microfacet_lobe, microfacet_pdf};
+use super::conductor::{microfacet_lobe, microfacet_lobe_pdf, microfacet_pdf};
 use super::fresnel::{
     fresnel_dielectric, fresnel_diffuse_reflectance, reflect, reflect_z, refract,
 };
@@ -222,13 +222,25 @@ impl RoughPlastic<'_> {
             return SampledSpectrum::ZERO;
         }
         let c = self.coating;
-        let spec = match microfacet_lobe(&c.mf, wo, wi) {
+        self.value(
+            wo,
+            wi,
+            microfacet_lobe(&c.mf, wo, wi),
+            c.transmittance(wo.z),
+        )
+    }
+
+    /// f·cos θi of a pair above the surface, given the coating's lobe there
+    /// ([`microfacet_lobe`]) and its transmittance towards `wo`.
+    #[inline(always)]
+    fn value(&self, wo: Vec3, wi: Vec3, lobe: Option<(f32, Vec3)>, t_o: f32) -> SampledSpectrum {
+        let c = self.coating;
+        let spec = match lobe {
             Some((v, h)) => self.ks * (fresnel_dielectric(wo.dot(h), c.eta).0 * v),
             None => SampledSpectrum::ZERO,
         };
-        let (t_i, t_o) = (c.transmittance(wo.z), c.transmittance(wi.z));
         let diff = base(self.kd, c.internal_reflectance, self.nonlinear)
-            * (INV_PI * wi.z * t_i * t_o / (c.eta * c.eta));
+            * (INV_PI * wi.z * t_o * c.transmittance(wi.z) / (c.eta * c.eta));
         spec + diff
     }
 
@@ -246,13 +258,21 @@ impl RoughPlastic<'_> {
         if wo.z <= 0.0 {
             return None;
         }
-        let ps = self.specular_probability(self.coating.transmittance(wo.z));
+        let t_o = self.coating.transmittance(wo.z);
+        let ps = self.specular_probability(t_o);
         let wi = if u1 < ps {
             reflect(wo, self.coating.mf.sample(wo, u2))
         } else {
             square_to_cosine_hemisphere(u2)
         };
-        reflection_sample(wi, self.pdf(wo, wi), self.eval(wo, wi))
+        if wi.z <= 0.0 {
+            return None;
+        }
+        // `eval` and `pdf` at once, sharing the microfacet terms and the transmittance towards
+        // wo: the same numbers, bit for bit.
+        let (lobe, mpdf) = microfacet_lobe_pdf(&self.coating.mf, wo, wi);
+        let pdf = ps * mpdf + (1.0 - ps) * cosine_hemisphere_pdf(wi.z);
+        reflection_sample(wi, pdf, self.value(wo, wi, lobe, t_o))
     }
 }
 
@@ -260,6 +280,41 @@ impl RoughPlastic<'_> {
 mod tests {
     use super::*;
     use crate::material::microfacet::Distribution;
+
+    /// Sampling shares the microfacet terms of `eval` and `pdf`: its density and weight are
+    /// theirs bit for bit (likewise for the rough conductor).
+    #[test]
+    fn samples_carry_eval_and_pdf_exactly() {
+        use crate::material::conductor;
+        let kd = SampledSpectrum::from_rgb(crate::color::Rgb::new(0.6, 0.3, 0.1));
+        let ks = SampledSpectrum::splat(0.9);
+        for (dist, alpha) in [(Distribution::Ggx, 0.2f32), (Distribution::Beckmann, 0.35)] {
+            let coating = RoughCoating::new(Microfacet::new(dist, alpha), 1.5);
+            let p = RoughPlastic {
+                kd,
+                ks,
+                coating: &coating,
+                nonlinear: true,
+            };
+            for k in 0..400 {
+                let f = |x: f32| (k as f32 * x).fract();
+                let wo = Vec3::new(f(0.37) - 0.5, f(0.71) - 0.5, f(0.13) + 0.05).normalize();
+                let (u1, u2) = (f(0.53), [f(0.29), f(0.83)]);
+                if let Some(s) = p.sample(wo, u1, u2) {
+                    assert_eq!(s.pdf.to_bits(), p.pdf(wo, s.wi).to_bits());
+                    let w = p.eval(wo, s.wi) / s.pdf;
+                    assert_eq!(s.weight.0.map(f32::to_bits), w.0.map(f32::to_bits));
+                }
+                let mf = coating.mf;
+                if let Some(s) = conductor::sample(&mf, None, ks, wo, u2) {
+                    let pdf = conductor::microfacet_pdf(&mf, wo, s.wi);
+                    assert_eq!(s.pdf.to_bits(), pdf.to_bits());
+                    let w = conductor::eval(&mf, None, ks, wo, s.wi) / pdf;
+                    assert_eq!(s.weight.0.map(f32::to_bits), w.0.map(f32::to_bits));
+                }
+            }
+        }
+    }
 
     /// The coating transmits at most what it does not reflect (masking loses the rest) and
     /// tends to 1 − F for a nearly smooth coating.

@@ -10,7 +10,7 @@ mod vector;
 pub use bounds::{Bounds3, GAMMA3};
 pub use frame::Frame;
 pub use ray::{offset_ray_origin, Ray, SHADOW_EPSILON};
-pub use ray_batch::{RayBatch, BATCH};
+pub use ray_batch::{lanes, RayBatch, BATCH};
 pub use transform::{Matrix4, Transform};
 pub use vector::{abs_dot, Normal3, Point2, Point3, Vec3};
 

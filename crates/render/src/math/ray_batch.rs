@@ -63,13 +63,18 @@ impl RayBatch {
     /// The active lanes, in order.
     #[inline]
     pub fn lanes(&self) -> impl Iterator<Item = usize> {
-        let mut m = self.active;
-        std::iter::from_fn(move || {
-            (m != 0).then(|| {
-                let i = m.trailing_zeros() as usize;
-                m &= m - 1;
-                i
-            })
-        })
+        lanes(self.active)
     }
+}
+
+/// The lanes of the mask `m` (bit i for lane i), lowest first.
+#[inline(always)]
+pub fn lanes(mut m: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (m != 0).then(|| {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            i
+        })
+    })
 }

@@ -60,6 +60,8 @@ pub struct Sampler {
     /// The pixel's seed (independent samplers seed each sample's stream with it).
     pixel_seed: u64,
     spp: u32,
+    /// The first sample index the current pass draws (tables start there, or before).
+    begin: u32,
     /// One past the last sample index the current pass draws (tables stop there).
     end: u32,
     /// How the numbers are made, with the pixel's pattern seed.
@@ -147,6 +149,7 @@ impl Sampler {
         self.rng = Pcg32::new(h, pixel);
         self.pixel_seed = h;
         self.spp = spp.max(1);
+        self.begin = 0;
         self.end = self.spp;
         self.mode = match kind {
             SamplerKind::Sobol => Mode::Sobol(pattern),
@@ -167,6 +170,15 @@ impl Sampler {
         self.end = end.clamp(1, self.spp);
     }
 
+    /// Says that this pixel's samples `first..end` will be drawn, in any order: a table is
+    /// filled for all of them (from the chunk's first one on) the first time any of them
+    /// needs it, so that a sample that comes to a dimension after a later one still finds it
+    /// tabulated. The values do not change.
+    pub fn draw_range(&mut self, first: u32, end: u32) {
+        self.begin = first;
+        self.draw_until(end);
+    }
+
     /// A free-standing independent sampler (tests, preprocessing) seeded by `seed` on stream
     /// `stream`.
     pub fn new(seed: u64, stream: u64) -> Self {
@@ -174,6 +186,7 @@ impl Sampler {
             rng: Pcg32::new(hash2(seed, stream), stream),
             pixel_seed: hash2(seed, stream),
             spp: 1,
+            begin: 0,
             end: 1,
             mode: Mode::Independent,
             index: 0,
@@ -284,6 +297,7 @@ impl Sampler {
     #[inline(never)]
     fn fill(&mut self, seed: u32, d: usize, j: usize) {
         let s = self.dim_seeds(seed, d as u32);
+        let j = (self.begin.saturating_sub(self.chunk) as usize).min(j);
         let n = (self.end.saturating_sub(self.chunk) as usize).clamp(j + 1, CHUNK);
         self.batched |= 1 << d;
         self.batch_from[d] = j as u8;

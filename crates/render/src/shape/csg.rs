@@ -98,8 +98,8 @@ pub enum CsgNode {
     },
 }
 
-/// Largest number of leaves of the expanded tree: hits name a leaf by its index below
-/// `FLIP` (2³¹).
+/// Largest number of leaves of the expanded tree: hits name a leaf by its index, below the
+/// bit that marks a flipped normal.
 pub const MAX_EXPANDED_LEAVES: u64 = (FLIP - 1) as u64;
 
 /// Why a list of nodes is not a tree.

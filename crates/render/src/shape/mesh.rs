@@ -116,6 +116,26 @@ impl Mesh {
         intersect_triangle(a, b, c, ray, sr)
     }
 
+    /// Starts loading the vertex data that [`Mesh::geometry`] of triangle `i` reads (it waits
+    /// for the triangle's indices, not for the vertices).
+    #[inline(always)]
+    pub(crate) fn prefetch_vertices(&self, i: u32) {
+        let Some(&[ia, ib, ic]) = self.indices.get(i as usize) else {
+            return;
+        };
+        for v in [ia, ib, ic] {
+            if let Some(p) = self.positions.get(v as usize) {
+                crate::simd::prefetch(p);
+            }
+            if let Some(n) = self.normals.get(v as usize) {
+                crate::simd::prefetch(n);
+            }
+            if let Some(t) = self.uvs.get(v as usize) {
+                crate::simd::prefetch(t);
+            }
+        }
+    }
+
     /// The surface of triangle `i` at barycentrics (β, γ).
     pub fn geometry(&self, i: u32, beta: f32, gamma: f32) -> LocalGeometry {
         let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);

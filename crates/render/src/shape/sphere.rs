@@ -66,17 +66,28 @@ impl Sphere {
 
     /// The surface at a hit found by [`Sphere::intersect`].
     pub fn geometry(&self, ray: &Ray, t: f32) -> LocalGeometry {
+        local_geometry(&self.world_from_object, self.object_hit(ray, t), true)
+    }
+
+    /// [`Sphere::geometry`] without texture coordinates (left at zero): for scenes where no
+    /// texture reads them, which spares an arctangent and an arccosine per hit.
+    pub fn geometry_without_uv(&self, ray: &Ray, t: f32) -> LocalGeometry {
+        local_geometry(&self.world_from_object, self.object_hit(ray, t), false)
+    }
+
+    /// The hit at `t` along `ray` in object space, re-projected onto the unit sphere to remove
+    /// the error accumulated along the ray.
+    #[inline(always)]
+    fn object_hit(&self, ray: &Ray, t: f32) -> Vec3 {
         let o = self.world_from_object.inv_point(ray.o);
         let d = self.world_from_object.inv_vector(ray.d);
-        // Re-project the hit onto the surface to remove the error accumulated along the ray.
-        let mut q = (o + d * t).to_vec();
-        q = q / q.norm();
-        local_geometry(&self.world_from_object, q)
+        let q = (o + d * t).to_vec();
+        q / q.norm()
     }
 
     /// The surface at the object-space point `q` (unit length).
     pub fn geometry_at(&self, q: Vec3) -> LocalGeometry {
-        local_geometry(&self.world_from_object, q)
+        local_geometry(&self.world_from_object, q, true)
     }
 
     /// Exact bounds of the transformed sphere (an ellipsoid): along axis i its half extent is
@@ -98,13 +109,11 @@ impl Sphere {
     }
 }
 
-fn local_geometry(t: &Transform, q: Vec3) -> LocalGeometry {
-    let mut phi = q.y.atan2(q.x);
-    if phi < 0.0 {
-        phi += 2.0 * PI;
-    }
-    let u = (phi * 0.5 * INV_PI).min(super::ONE_MINUS_EPS);
-    let v = crate::math::safe_acos(q.z) * INV_PI;
+/// The surface at the object-space point `q` (unit length), with its texture coordinates
+/// when `uv` (else (0, 0)).
+#[inline(always)]
+fn local_geometry(t: &Transform, q: Vec3, uv: bool) -> LocalGeometry {
+    let (u, v) = if uv { sphere_uv(q) } else { (0.0, 0.0) };
     let n = t.normal(Normal3::new(q.x, q.y, q.z)).normalize();
     let dpdu = t.vector(Vec3::new(-2.0 * PI * q.y, 2.0 * PI * q.x, 0.0));
     LocalGeometry {
@@ -114,6 +123,16 @@ fn local_geometry(t: &Transform, q: Vec3) -> LocalGeometry {
         uv: Point2::new(u, v),
         dpdu,
     }
+}
+
+/// Longitude and colatitude of the unit vector `q`, both scaled to [0, 1).
+fn sphere_uv(q: Vec3) -> (f32, f32) {
+    let mut phi = q.y.atan2(q.x);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let u = (phi * 0.5 * INV_PI).min(super::ONE_MINUS_EPS);
+    (u, crate::math::safe_acos(q.z) * INV_PI)
 }
 
 #[cfg(test)]

@@ -107,6 +107,12 @@ impl Bvh {
         (prims, rest)
     }
 
+    /// True when batches test every primitive against all their rays at once (small scenes),
+    /// a cost that does not shrink with the number of active lanes.
+    pub fn is_flat(&self) -> bool {
+        !self.flat_prims.is_empty() || !self.flat_rest.is_empty()
+    }
+
     /// The closest hit of every active lane of `rays`.
     pub fn intersect_batch(
         &self,
@@ -148,7 +154,13 @@ impl Bvh {
             );
             stats.prim_tests += self.flat_prims.len() as u64 * rays.active.count_ones() as u64;
         }
-        for i in rays.lanes() {
+        // The other primitives lane by lane (none, in most small scenes).
+        let rest = if self.flat_rest.is_empty() {
+            0
+        } else {
+            rays.active
+        };
+        for i in crate::math::lanes(rest) {
             let mut ray = rays.ray(i);
             if let Some(h) = &hits[i] {
                 ray.tmax = h.t.next_up();
@@ -204,7 +216,11 @@ impl Bvh {
             );
             stats.prim_tests += self.flat_prims.len() as u64 * rays.active.count_ones() as u64;
         }
-        let mut rest = rays.active & !hit;
+        let mut rest = if self.flat_rest.is_empty() {
+            0
+        } else {
+            rays.active & !hit
+        };
         while rest != 0 {
             let i = rest.trailing_zeros() as usize;
             rest &= rest - 1;

@@ -58,13 +58,13 @@ impl Bvh {
         let root = build_node(refs, 0, &info, 0, &mut nodes);
         let ids: Vec<u32> = refs.iter().map(|p| p.id()).collect();
         let mut bvh = Self {
-            nodes,
             root,
             ids,
             ..Self::default()
         };
-        bvh.pack_triangles(geometry);
-        bvh.pack_objects(geometry);
+        bvh.pack_triangles(&mut nodes, geometry);
+        bvh.pack_objects(&mut nodes, geometry);
+        bvh.nodes = nodes.into();
         bvh.flat = bvh.flat_root();
         if !bvh.flat.is_empty() {
             (bvh.flat_prims, bvh.flat_rest) = bvh.flat_split(geometry);

@@ -2,11 +2,10 @@
 //! form, child references, and blocks of four triangles; and the packing of triangle leaves
 //! into those blocks.
 
-use rayon::prelude::*;
-
 use super::Bvh;
 use crate::accel::blocks::{Box4, Quad4, Sphere4};
 use crate::geometry::{Geometry, PrimRef as GeomPrim};
+use crate::mem::HugeSlice;
 use crate::shape::Shape;
 
 /// Children per node.
@@ -139,7 +138,7 @@ impl Ref {
 impl Bvh {
     /// Replaces the triangle leaves' ranges of primitive ids by blocks of four triangles, in
     /// node order.
-    pub(super) fn pack_triangles(&mut self, geometry: &Geometry) {
+    pub(super) fn pack_triangles(&mut self, nodes: &mut [BvhNode], geometry: &Geometry) {
         // Each block: the first primitive (in `ids`) and how many lanes it uses.
         let mut src: Vec<(u32, u32)> = Vec::new();
         let mut pack = |r: &mut Ref| {
@@ -153,7 +152,7 @@ impl Bvh {
             }
         };
         pack(&mut self.root);
-        for node in &mut self.nodes {
+        for node in nodes.iter_mut() {
             for i in 0..W {
                 let mut r = Ref {
                     child: node.child[i],
@@ -193,30 +192,30 @@ impl Bvh {
             t
         };
         self.tris = if src.len() > 4096 {
-            src.par_iter().map(fill).collect()
+            HugeSlice::from_fn_par(src.len(), |i| fill(&src[i]))
         } else {
-            src.iter().map(fill).collect()
+            HugeSlice::new(&src.iter().map(fill).collect::<Vec<_>>())
         };
     }
 
     /// Replaces the ranges of primitive ids of parallelogram, sphere and box leaves by blocks
     /// of four of their kind, in node order (unused lanes repeat the leaf's first primitive and
     /// have the id `u32::MAX`).
-    pub(super) fn pack_objects(&mut self, geometry: &Geometry) {
+    pub(super) fn pack_objects(&mut self, nodes: &mut [BvhNode], geometry: &Geometry) {
         let objects = geometry.objects();
         let object = |id: u32| match geometry.prim(id) {
             GeomPrim::Object(o) => &objects[o as usize].shape,
             GeomPrim::Triangle { .. } => unreachable!("an object leaf holds no triangles"),
         };
         let mut refs: Vec<(usize, usize)> = vec![(usize::MAX, 0)];
-        refs.extend((0..self.nodes.len()).flat_map(|n| (0..W).map(move |c| (n, c))));
+        refs.extend((0..nodes.len()).flat_map(|n| (0..W).map(move |c| (n, c))));
         for (n, c) in refs {
             let r = if n == usize::MAX {
                 self.root
             } else {
                 Ref {
-                    child: self.nodes[n].child[c],
-                    meta: self.nodes[n].meta[c],
+                    child: nodes[n].child[c],
+                    meta: nodes[n].meta[c],
                 }
             };
             let kind = r.meta & !COUNT_MASK;
@@ -269,7 +268,7 @@ impl Bvh {
             if n == usize::MAX {
                 self.root.child = start as u32;
             } else {
-                self.nodes[n].child[c] = start as u32;
+                nodes[n].child[c] = start as u32;
             }
         }
     }

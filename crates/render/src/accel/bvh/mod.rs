@@ -8,7 +8,8 @@
 //! Triangle leaves point into [`Tri4`] blocks that hold exact copies of the vertex positions of
 //! four triangles (one lane each) with their primitive ids, 160 bytes; other leaves point into
 //! the list of primitive ids in leaf order and go through [`Geometry::intersect_prim`]. A leaf
-//! is never mixed. Unused child slots hold an inverted box and an empty leaf, so that even a
+//! is never mixed. Nodes and triangle blocks are [`HugeSlice`]s: on huge pages when large, since
+//! incoherent rays read them at random and would otherwise miss the TLB. Unused child slots hold an inverted box and an empty leaf, so that even a
 //! NaN ray, which "hits" every box, only visits real nodes.
 //!
 //! Build (Wald 2007; Embree): primitives are binned by centroid ([`BINS`] bins on each axis) and
@@ -51,14 +52,16 @@ pub use layout::{BvhNode, Tri4};
 use batch::FlatPrim;
 
 use super::blocks::{Box4, Quad4, Sphere4};
+use crate::mem::HugeSlice;
 use layout::Ref;
 
 /// An 8-wide BVH over the bounded primitives of a geometry.
 #[derive(Clone, Debug)]
 pub struct Bvh {
-    nodes: Vec<BvhNode>,
+    /// Nodes and triangle blocks, read at random: on huge pages when large.
+    nodes: HugeSlice<BvhNode>,
     root: Ref,
-    tris: Vec<Tri4>,
+    tris: HugeSlice<Tri4>,
     /// Blocks of four parallelograms, spheres and boxes, with their lanes' primitive ids.
     quads: Vec<(Quad4, [u32; 4])>,
     spheres: Vec<(Sphere4, [u32; 4])>,
@@ -77,9 +80,9 @@ pub struct Bvh {
 impl Default for Bvh {
     fn default() -> Self {
         Self {
-            nodes: Vec::new(),
+            nodes: HugeSlice::default(),
             root: Ref::EMPTY,
-            tris: Vec::new(),
+            tris: HugeSlice::default(),
             quads: Vec::new(),
             spheres: Vec::new(),
             boxes: Vec::new(),
@@ -238,7 +241,7 @@ mod tests {
         let g = triangles(&tris);
         let b = bvh(&g);
         let mut seen = vec![false; tris.len()];
-        for t in &b.tris {
+        for t in b.tris.iter() {
             for &id in &t.id {
                 if id != u32::MAX {
                     assert!(!seen[id as usize]);

@@ -1,0 +1,151 @@
+//! The path tracer's batches give every sample the radiance it gets alone, bit for bit: in a
+//! small scene, whose batches give a lane the next sample as soon as its path ends, and in a
+//! large one, whose batches start sixteen camera rays together (traced as packets); for full
+//! and partial sample queues, from any first sample.
+
+mod support;
+
+use candela_render::accel::AccelKind;
+use candela_render::integrator::{Integrator, Path, SampleBatch, SAMPLE_QUEUE};
+use candela_render::light::{Components, Light, PointLight};
+use candela_render::material::Material;
+use candela_render::math::{Point3, Ray, Transform, Vec3};
+use candela_render::sampling::{Pcg32, Sampler, SamplerKind};
+use candela_render::shape::{Mesh, Shape, Sphere};
+use candela_render::spectrum::{SampledSpectrum, Wavelengths};
+use candela_render::stats::RayStats;
+use candela_render::texture::Texture;
+use candela_render::{Rgb, Scene, SceneBuilder};
+
+/// Three thousand small triangles and a few spheres around the origin, lit by a point light,
+/// seen by the default camera from z = 12.
+fn large_scene() -> Scene {
+    let mut rng = Pcg32::new(5, 9);
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::new(0.7, 0.6, 0.5))));
+    let mut mesh = Mesh::default();
+    mesh.props.material = m;
+    let mut p = || {
+        Point3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        )
+    };
+    for _ in 0..3000 {
+        let c = p().to_vec() * 8.0;
+        let k = mesh.positions.len() as u32;
+        for _ in 0..3 {
+            mesh.positions.push(Point3::ORIGIN + c + p().to_vec());
+        }
+        mesh.indices.push([k, k + 1, k + 2]);
+    }
+    b.add_mesh(mesh);
+    for i in 0..6 {
+        let place = Transform::translation(Vec3::new(i as f32 - 2.5, 1.0, 2.0))
+            * Transform::scaling(Vec3::new(0.4, 0.4, 0.4));
+        b.add_shape(Shape::Sphere(Sphere::new(place)), m, None);
+    }
+    b.add_light(Light::Point(
+        PointLight {
+            position: Point3::new(1.0, 6.0, 9.0),
+            intensity: Rgb::splat(60.0),
+            spectrum: None,
+            falloff: Default::default(),
+        },
+        Components::from_intensity(Rgb::splat(60.0)),
+    ));
+    let mut scene = b.build(AccelKind::Bvh);
+    scene.camera.world_from_camera = Transform::look_at(
+        Point3::new(0.0, 0.0, 12.0),
+        Point3::ORIGIN,
+        Vec3::new(0.0, 1.0, 0.0),
+    )
+    .unwrap();
+    scene
+}
+
+/// Samples `first..last` of pixel (x, y) of a 32 × 32 image, traced as one queue and one by
+/// one: the same radiance and wavelengths, bit for bit.
+fn check(scene: &Scene, (x, y): (usize, usize), (first, last): (u32, u32), spp: u32) {
+    let path = Path {
+        max_depth: Some(8),
+        rr_depth: 2,
+        hide_emitters: false,
+    };
+    let mut sampler = Sampler::new(0, 0);
+    sampler.reset_for_pixel(SamplerKind::Sobol, 7, (y * 32 + x) as u64, spp);
+    sampler.draw_range(first, last);
+    let n = (last - first) as usize;
+    let mut rays = vec![Ray::new(Point3::ORIGIN, Vec3::X); n];
+    let mut cursors = Vec::new();
+    for (k, ray) in rays.iter_mut().enumerate() {
+        let [sx, sy] = sampler.pixel_sample(first + k as u32);
+        *ray = scene
+            .camera
+            .ray((x as f32 + sx) / 32.0, 1.0 - (y as f32 + sy) / 32.0);
+        cursors.push(sampler.cursor());
+    }
+    let singles: Vec<SampledSpectrum> = (0..n)
+        .map(|k| {
+            sampler.resume(cursors[k]);
+            let mut lambda = Wavelengths::Rgb;
+            path.radiance(
+                scene,
+                &rays[k],
+                &mut lambda,
+                &mut sampler,
+                &mut RayStats::default(),
+            )
+        })
+        .collect();
+    let mut lambdas = vec![Wavelengths::Rgb; n];
+    let mut out = vec![SampledSpectrum::ZERO; n];
+    let batch = SampleBatch {
+        rays: &rays,
+        lambdas: &mut lambdas,
+        cursors: &mut cursors,
+    };
+    path.radiance_batch(
+        scene,
+        batch,
+        &mut sampler,
+        &mut RayStats::default(),
+        &mut out,
+    );
+    let mut lit = 0;
+    for k in 0..n {
+        assert_eq!(
+            out[k].0.map(f32::to_bits),
+            singles[k].0.map(f32::to_bits),
+            "pixel ({x}, {y}) sample {}",
+            first as usize + k
+        );
+        lit += !out[k].is_black() as usize;
+    }
+    assert!(lit > 0, "pixel ({x}, {y}): nothing lit, nothing compared");
+}
+
+#[test]
+fn small_scene_batches_refill_their_lanes_and_agree_with_single_paths() {
+    let scene = support::radiosity::cornell(AccelKind::Bvh);
+    assert!(scene.accel.refills_lanes());
+    for (pixel, range, spp) in [
+        ((16, 16), (0, 64), 64),
+        ((5, 20), (0, 64), 64),
+        ((25, 9), (3, 40), 64),
+        ((12, 28), (60, 100), 128),
+    ] {
+        assert!((range.1 - range.0) as usize <= SAMPLE_QUEUE);
+        check(&scene, pixel, range, spp);
+    }
+}
+
+#[test]
+fn large_scene_batches_start_together_and_agree_with_single_paths() {
+    let scene = large_scene();
+    assert!(!scene.accel.refills_lanes());
+    for (pixel, range, spp) in [((16, 16), (0, 64), 64), ((14, 18), (7, 44), 64)] {
+        check(&scene, pixel, range, spp);
+    }
+}
