@@ -7,7 +7,7 @@ use crate::color::Rgb;
 use crate::geometry::{Geometry, Instance, Object};
 use crate::instance::Instances;
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
-use crate::light::{AreaLight, Emission, Light};
+use crate::light::{AreaLight, Emission, Light, LightSelector};
 use crate::material::{Material, MaterialId};
 use crate::math::{Point3, Ray, RayBatch, Transform, Vec3};
 use crate::sampling::pcg::hash2;
@@ -37,6 +37,8 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Indices of the lights at infinity (seen by escaping rays).
     pub infinite_lights: Vec<u32>,
+    /// How the path tracer chooses the light it samples at a shading point.
+    pub light_selector: LightSelector,
     /// The ambient intensity I_a of the local model (sum of `ambient_light`s).
     pub ambient: Rgb,
     /// True when a material has a stochastic opacity (see [`Material::opacity`]).
@@ -540,6 +542,7 @@ impl SceneBuilder {
         let instances = Instances::build(accel, &geometry);
         let accel = Accel::build(accel, &geometry);
         let has_masks = self.materials.iter().any(|m| m.opacity.is_some());
+        let light_selector = LightSelector::new(&self.lights, &self.emissions, &geometry);
         let reads_uv = self.materials.iter().any(Material::reads_uv)
             || self.emissions.iter().any(|e| !e.radiance.is_constant());
         Scene {
@@ -555,6 +558,7 @@ impl SceneBuilder {
             infinite_lights: (0..self.lights.len() as u32)
                 .filter(|&i| self.lights[i as usize].is_infinite())
                 .collect(),
+            light_selector,
             lights: self.lights,
             ambient: self.ambient,
             has_masks,

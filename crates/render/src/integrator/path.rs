@@ -1,16 +1,17 @@
 //! Path tracing of the rendering equation
 //! L(x→Θ) = L_e(x→Θ) + ∫ f_r(x, Ψ→Θ) L(x←Ψ) cos(N_x, Ψ) dω_Ψ.
 //!
-//! [`Path`]: at every vertex one light is sampled (next-event estimation) and one BSDF direction
-//! is sampled; both estimates are combined by multiple importance sampling with the power
-//! heuristic (Veach 1997). Russian roulette starts at `rr_depth` (default 5). `max_depth` follows
+//! [`Path`]: at every vertex one light is sampled (next-event estimation: the light chosen by
+//! its importance at the shading point, see [`crate::light::LightSelector`], and sampled by
+//! [`crate::light::Light::sample_from`]) and one BSDF direction is sampled; both estimates are
+//! combined by multiple importance sampling with the power heuristic (Veach 1997). Russian roulette starts at `rr_depth` (default 5). `max_depth` follows
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
 //! (The course's branching estimator is [`super::CoursePath`].)
 
 use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
+use crate::light::ShadingPoint;
 use crate::math::{lanes, Ray, RayBatch, BATCH};
-use crate::sampling::sampler::ONE_MINUS_EPSILON;
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -50,7 +51,9 @@ struct PathState {
     /// The previous vertex's BSDF density and whether it was a Dirac delta, for MIS.
     prev_pdf: f32,
     prev_delta: bool,
-    prev_p: crate::math::Point3,
+    /// The previous vertex as light selection and sampling saw it (MIS recomputes the
+    /// density with which it would have sampled the emitter the path finds).
+    prev: ShadingPoint,
     eta_scale: f32,
     depth: u32,
 }
@@ -64,7 +67,7 @@ impl PathState {
             ray: *camera_ray,
             prev_pdf: 0.0,
             prev_delta: true,
-            prev_p: camera_ray.o,
+            prev: ShadingPoint::at(camera_ray.o),
             eta_scale: 1.0,
             depth: 0,
         }
@@ -95,11 +98,7 @@ impl Path {
             alive: false,
         };
         let max_depth = self.max_depth.unwrap_or(u32::MAX);
-        let light_pick = if scene.lights.is_empty() {
-            0.0
-        } else {
-            1.0 / scene.lights.len() as f32
-        };
+        let lights = &scene.lights[..];
         let Some(hit) = hit else {
             // Lights at infinity, weighted against their own sampling.
             if st.depth > 0 || !self.hide_emitters {
@@ -114,7 +113,13 @@ impl Path {
                     let w = if st.prev_delta {
                         1.0
                     } else {
-                        power_heuristic(1.0, st.prev_pdf, 1.0, light_pick * light.pdf_escape(d))
+                        let pick = scene.light_selector.pmf(lights, &st.prev, i as usize);
+                        power_heuristic(
+                            1.0,
+                            st.prev_pdf,
+                            1.0,
+                            pick * light.pdf_escape_from(d, &st.prev),
+                        )
                     };
                     st.l += st.beta * le * w;
                 }
@@ -129,8 +134,8 @@ impl Path {
             if !le.is_black() {
                 let w = match si.props.light {
                     Some(li) if !st.prev_delta => {
-                        let pdf_light =
-                            light_pick * scene.lights[li as usize].pdf_hit(st.prev_p, si.p, si.n);
+                        let pick = scene.light_selector.pmf(lights, &st.prev, li as usize);
+                        let pdf_light = pick * lights[li as usize].pdf_hit(st.prev.p, si.p, si.n);
                         power_heuristic(1.0, st.prev_pdf, 1.0, pdf_light)
                     }
                     _ => 1.0,
@@ -148,38 +153,45 @@ impl Path {
         // The outgoing direction in the shading frame, shared by every BSDF query below.
         let (wo, flip) = bsdf.local_wo(si.wo);
 
-        // Next-event estimation: one light, chosen uniformly by the first number of the
-        // light's own pair (rescaled), so that each light keeps a stratified share of the
-        // pixel's samples (a separate number for the choice would give each light a random,
-        // unstratified subset of them).
+        // The shading point as light selection and sampling see it: the shading normal turned
+        // to the side of the outgoing direction.
+        let ns = bsdf.frame.n;
+        let sp = ShadingPoint {
+            p: si.p,
+            n: if ns.dot(si.wo) < 0.0 { -ns } else { ns },
+            reflect_only: bsdf.reflects_only(),
+        };
+
+        // Next-event estimation: one light, chosen by its importance at the shading point (see
+        // `LightSelector`) with the first number of the light's own pair, which is then
+        // rescaled within the light's share, so that each light keeps a stratified share of
+        // the pixel's samples (a separate number for the choice would give each light a
+        // random, unstratified subset of them).
         let mut shadow = None;
-        if !bsdf.is_delta() && light_pick > 0.0 {
-            let n = scene.lights.len();
+        if !bsdf.is_delta() {
             let mut u = sampler.next_2d();
-            let pick = ((u[0] * n as f32) as usize).min(n - 1);
-            if n > 1 {
-                u[0] = (u[0] * n as f32 - pick as f32).min(ONE_MINUS_EPSILON);
-            }
-            let light = &scene.lights[pick];
-            if let Some(ls) = light.sample(&scene.geometry, &scene.emissions, si.p, u, &st.lambda) {
-                let wi = bsdf.local_wi(ls.wi, flip);
-                let f = bsdf.eval_local(wo, wi);
-                if !f.is_black() {
-                    let pdf_light = light_pick * ls.pdf;
-                    let w = if ls.delta {
-                        1.0
-                    } else {
-                        power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
-                    };
-                    shadow = Some((
-                        super::local::shadow_ray(&si, ls.wi, ls.target),
-                        st.beta * f * ls.li * (w / pdf_light),
-                    ));
+            if let Some((pick, pick_pdf, u0)) = scene.light_selector.pick(lights, &sp, u[0]) {
+                u[0] = u0;
+                let light = &lights[pick];
+                if let Some(ls) =
+                    light.sample_from(&scene.geometry, &scene.emissions, &sp, u, &st.lambda)
+                {
+                    let wi = bsdf.local_wi(ls.wi, flip);
+                    let f = bsdf.eval_local(wo, wi);
+                    if !f.is_black() {
+                        let pdf_light = pick_pdf * ls.pdf;
+                        let w = if ls.delta {
+                            1.0
+                        } else {
+                            power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
+                        };
+                        shadow = Some((
+                            super::local::shadow_ray(&si, ls.wi, ls.target),
+                            st.beta * f * ls.li * (w / pdf_light),
+                        ));
+                    }
                 }
             }
-        } else if !bsdf.is_delta() {
-            // Keep the sample stream aligned whether or not lights exist.
-            sampler.next_2d();
         }
 
         // BSDF sampling continues the path.
@@ -200,7 +212,7 @@ impl Path {
         }
         st.prev_pdf = bs.pdf;
         st.prev_delta = bs.delta;
-        st.prev_p = si.p;
+        st.prev = sp;
         st.eta_scale *= bs.eta * bs.eta;
         st.ray = si.spawn_ray(bs.wi);
         st.depth += 1;

@@ -53,6 +53,13 @@ impl Environment {
         }
     }
 
+    /// True for image maps, which are sampled by their luminance (constant environments are
+    /// sampled uniformly over the sphere, or cosine-weighted about a surface's normal).
+    #[inline]
+    pub fn is_importance_sampled(&self) -> bool {
+        self.distribution.is_some()
+    }
+
     /// The lat-long coordinates of a world direction.
     #[inline]
     fn uv(&self, d: Vec3) -> Point2 {

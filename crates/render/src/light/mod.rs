@@ -5,23 +5,27 @@
 //!   direction and the ambient, diffuse and specular intensities it delivers at a point
 //!   ([`Light::local`]); each light may carry separate intensities
 //!   (`components(<Ia>, <Id>, <Is>)`, default I_a = 0, I_d = I_s = I);
-//! - the path tracer samples lights ([`Light::sample`]) and asks for the density of a direction
-//!   found by BSDF sampling ([`Light::pdf_hit`], [`Light::pdf_escape`]) for multiple importance
-//!   sampling.
+//! - the path tracer chooses a light ([`LightSelector`]), samples it as seen from a shading
+//!   point ([`Light::sample_from`]; [`Light::sample`] from a bare point) and asks for the
+//!   density of a direction found by BSDF sampling ([`Light::pdf_hit`],
+//!   [`Light::pdf_escape_from`]) for multiple importance sampling.
 
 mod area;
 mod emission;
 mod infinite;
 mod point;
+mod select;
 
 pub use area::{AreaLight, AreaShape};
 pub use emission::Emission;
 pub use infinite::{Environment, HemisphereLight};
 pub use point::{Falloff, PointLight, SpotLight, SpotPattern, SpotProfile};
+pub use select::{LightSelector, ShadingPoint, MAX_IMPORTANCE_LIGHTS};
 
 use crate::color::Rgb;
 use crate::geometry::Geometry;
 use crate::math::{Normal3, Point3, Vec3};
+use crate::sampling::warp;
 use crate::spectrum::{SampledSpectrum, Spectrum, Wavelengths};
 use std::sync::Arc;
 
@@ -174,7 +178,7 @@ impl Light {
         })
     }
 
-    /// Samples the light as seen from `p` for the path tracer.
+    /// Samples the light as seen from `p` (with no surface to favour).
     pub fn sample(
         &self,
         geometry: &Geometry,
@@ -183,11 +187,37 @@ impl Light {
         u: [f32; 2],
         lambda: &Wavelengths,
     ) -> Option<LightSample> {
+        self.sample_from(geometry, emissions, &ShadingPoint::at(p), u, lambda)
+    }
+
+    /// Samples the light as seen from the shading point `sp` for the path tracer. A constant
+    /// environment or a hemisphere light seen from a point whose BSDF only reflects is sampled
+    /// cosine-weighted about the shading normal (the hemisphere where the BSDF is not zero);
+    /// elsewhere each light samples itself as [`Light::sample`] does.
+    pub fn sample_from(
+        &self,
+        geometry: &Geometry,
+        emissions: &[Emission],
+        sp: &ShadingPoint,
+        u: [f32; 2],
+        lambda: &Wavelengths,
+    ) -> Option<LightSample> {
+        let p = sp.p;
         // Area lights first, on a path of their own (no merge with the other lights' samples).
         if let Light::Area(a) = self {
             return a
                 .sample(geometry, emissions, p, u, lambda)
                 .filter(LightSample::usable);
+        }
+        if let Some(wi) = self.cosine_sample(sp, u) {
+            let s = LightSample {
+                wi,
+                li: self.escaped(wi, lambda),
+                pdf: warp::cosine_hemisphere_pdf(sp.n.dot(wi)),
+                delta: false,
+                target: Target::Infinite,
+            };
+            return s.usable().then_some(s);
         }
         let s = match self {
             Light::Point(l, _) => {
@@ -266,8 +296,38 @@ impl Light {
         }
     }
 
+    /// True when [`Light::sample_from`] samples this light cosine-weighted about the normal of
+    /// `sp`: a constant environment or a hemisphere light, seen from a BSDF that only reflects.
+    #[inline]
+    fn cosine_sampled(&self, sp: &ShadingPoint) -> bool {
+        sp.reflect_only
+            && match self {
+                Light::Environment(e) => !e.is_importance_sampled(),
+                Light::Hemisphere(..) => true,
+                _ => false,
+            }
+    }
+
+    /// The cosine-weighted direction about the normal of `sp`, for lights sampled so there.
+    #[inline]
+    fn cosine_sample(&self, sp: &ShadingPoint, u: [f32; 2]) -> Option<Vec3> {
+        self.cosine_sampled(sp).then(|| {
+            crate::math::Frame::from_normal(sp.n.to_normal())
+                .to_world(warp::square_to_cosine_hemisphere(u))
+        })
+    }
+
     /// The solid-angle density of sampling direction `d` of a light at infinity.
     pub fn pdf_escape(&self, d: Vec3) -> f32 {
+        self.pdf_escape_from(d, &ShadingPoint::at(Point3::ORIGIN))
+    }
+
+    /// The solid-angle density with which [`Light::sample_from`] at `sp` samples the direction
+    /// `d` of a light at infinity.
+    pub fn pdf_escape_from(&self, d: Vec3, sp: &ShadingPoint) -> f32 {
+        if self.cosine_sampled(sp) {
+            return warp::cosine_hemisphere_pdf(sp.n.dot(d));
+        }
         match self {
             Light::Environment(e) => e.pdf(d),
             Light::Hemisphere(h, _) => h.pdf(d),

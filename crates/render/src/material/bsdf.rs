@@ -224,6 +224,16 @@ impl Bsdf<'_> {
         }
     }
 
+    /// True when the BSDF only reflects: it is zero unless `wo` and `wi` lie on the same side
+    /// of the shading normal (every model but the dielectrics).
+    #[inline]
+    pub fn reflects_only(&self) -> bool {
+        !matches!(
+            self.model,
+            BsdfModel::Dielectric { .. } | BsdfModel::RoughDielectric { .. }
+        )
+    }
+
     /// True when every component is a Dirac delta (light sampling cannot help).
     pub fn is_delta(&self) -> bool {
         matches!(

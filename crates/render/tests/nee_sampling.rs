@@ -1,0 +1,405 @@
+//! Next-event estimation's samplers against their densities: rectangle lights (in a general
+//! orientation, from near and far, in front, behind, at low angles) against
+//! `Light::pdf_hit`, constant environments and hemisphere
+//! lights sampled cosine-weighted about a shading normal against `Light::pdf_escape_from`
+//! (χ² goodness of fit, and the density each sample reports equal to the one MIS uses), and the
+//! importance-based choice of a light (`LightSelector`) against its probabilities.
+
+mod support;
+
+use support::chi2;
+
+use candela_render::accel::AccelKind;
+use candela_render::light::{
+    Components, DistantLight, Emission, Environment, Falloff, HemisphereLight, Light, PointLight,
+    ShadingPoint, SpotLight, SpotProfile, Target,
+};
+use candela_render::material::Material;
+use candela_render::math::{Point3, Ray, Transform, Vec3};
+use candela_render::sampling::Pcg32;
+use candela_render::shape::{Parallelogram, Shape};
+use candela_render::spectrum::Wavelengths;
+use candela_render::stats::RayStats;
+use candela_render::texture::Texture;
+use candela_render::{Rgb, Scene, SceneBuilder};
+use chi2::{sidak, Chi2, Grid, ALPHA};
+
+const SAMPLES: usize = 200_000;
+const ROWS: usize = 24;
+
+/// A rectangle (orthogonal edges) in a general orientation, 1.4 × 0.9.
+fn rectangle() -> Parallelogram {
+    let v = Vec3::new(1.2, 0.3, 0.5).normalize() * 1.4;
+    let w = v.cross(Vec3::new(0.1, 1.0, -0.2)).normalize() * 0.9;
+    Parallelogram::new(Point3::new(-0.6, -0.4, 2.0), v, w).unwrap()
+}
+
+/// A scene holding the rectangle light alone.
+fn rect_scene(two_sided: bool) -> Scene {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+    let em = b.add_emission(Emission {
+        radiance: Texture::Uniform(Rgb::splat(2.0)),
+        two_sided,
+    });
+    b.add_shape(Shape::Parallelogram(rectangle()), m, Some(em));
+    b.build(AccelKind::None)
+}
+
+/// The points the rectangle is seen from: (name, point, two-sided, grid power).
+fn rect_cases() -> Vec<(&'static str, Point3, bool, f64)> {
+    let r = rectangle();
+    let centre = r.p + r.v * 0.5 + r.w * 0.5;
+    let n = r.normal().to_vec();
+    vec![
+        ("rectangle from the front", centre + n * 1.5, false, 2.0),
+        (
+            "rectangle from close above a corner",
+            r.p + n * 0.05 + r.v * 0.1,
+            false,
+            1.0,
+        ),
+        (
+            "rectangle at a low angle",
+            centre + r.v * 1.2 + n * 0.4,
+            true,
+            1.0,
+        ),
+        (
+            "rectangle, two-sided, from behind",
+            centre - n * 0.7,
+            true,
+            1.0,
+        ),
+        (
+            "rectangle, one-sided, from behind (no sample)",
+            centre - n * 0.7,
+            false,
+            1.0,
+        ),
+    ]
+}
+
+fn tests_count() -> usize {
+    rect_cases().len() + 3
+}
+
+fn seed(name: &str) -> u64 {
+    name.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// pdf_hit at the first emitting point along `d`, else 0.
+fn hit_pdf(s: &Scene, p: Point3, d: Vec3) -> f32 {
+    match s.interact(&Ray::new(p, d), &mut RayStats::default()) {
+        Some(si) if !s.emitted(&si, &Wavelengths::Rgb).to_rgb().is_black() => {
+            s.lights[0].pdf_hit(p, si.p, si.n)
+        }
+        _ => 0.0,
+    }
+}
+
+// The directions of rectangle samples follow pdf_hit, from in front, from close above a
+// corner, at a low angle and from behind (two-sided); a one-sided rectangle seen from behind
+// gives no sample and has density 0.
+#[test]
+fn chi2_rectangle_light() {
+    let level = sidak(ALPHA, tests_count());
+    let mut failures = Vec::new();
+    for (name, p, two_sided, power) in rect_cases() {
+        let s = rect_scene(two_sided);
+        let light = &s.lights[0];
+        let r = rectangle();
+        let axis = r.p + r.v * 0.5 + r.w * 0.5 - p;
+        let t = Chi2 {
+            name,
+            grid: Grid::new(axis, power, ROWS),
+            samples: SAMPLES,
+            seed: seed(name),
+            expected_mass: None,
+            level,
+        };
+        match t.run(
+            |u| {
+                let ls = light.sample(
+                    &s.geometry,
+                    &s.emissions,
+                    p,
+                    [u[0], u[1]],
+                    &Wavelengths::Rgb,
+                )?;
+                (!ls.li.is_black()).then_some((ls.wi, ls.pdf))
+            },
+            |d| hit_pdf(&s, p, d),
+        ) {
+            Ok(r) => println!(
+                "{name}: p-value {:.3e}, mass {:.4}",
+                r.p_value, r.pdf_integral
+            ),
+            Err(e) => failures.push(e),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+// The density every rectangle sample reports is the one MIS uses for the point it hit
+// (pdf_hit), from near, far (less than 10⁻⁴ sr), behind and at a grazing angle.
+#[test]
+fn rectangle_sample_density_is_pdf_hit() {
+    let s = rect_scene(true);
+    let light = &s.lights[0];
+    let r = rectangle();
+    let centre = r.p + r.v * 0.5 + r.w * 0.5;
+    let n = r.normal().to_vec();
+    let mut rng = Pcg32::new(5, 9);
+    for p in [
+        centre + n * 1.5,
+        centre - n * 0.3 + r.w * 0.4,
+        centre + n * 300.0,
+        centre + r.v * 2.0 + n * 0.1,
+    ] {
+        for _ in 0..2000 {
+            let u = [rng.next_f32(), rng.next_f32()];
+            let Some(ls) = light.sample(&s.geometry, &s.emissions, p, u, &Wavelengths::Rgb) else {
+                continue;
+            };
+            let Target::Surface(q, qn) = ls.target else {
+                panic!("area light")
+            };
+            let pdf = light.pdf_hit(p, q, qn);
+            assert!(
+                (pdf - ls.pdf).abs() <= 2e-3 * ls.pdf,
+                "{p:?} {u:?}: sample {} pdf_hit {pdf}",
+                ls.pdf
+            );
+        }
+    }
+}
+
+fn infinite_lights() -> Vec<(&'static str, Light)> {
+    vec![
+        (
+            "constant environment, cosine about the normal",
+            Light::Environment(Environment::new(
+                Texture::Uniform(Rgb::splat(1.5)),
+                Transform::rotation_x(20.0),
+            )),
+        ),
+        (
+            "hemisphere light, cosine about the normal",
+            Light::Hemisphere(
+                HemisphereLight {
+                    radiance: Rgb::splat(2.0),
+                    up: Vec3::new(0.3, -0.5, 0.8).normalize(),
+                },
+                Components::from_intensity(Rgb::splat(2.0)),
+            ),
+        ),
+    ]
+}
+
+// Seen from a BSDF that only reflects, a constant environment and a hemisphere light sample
+// cosine-weighted about the shading normal: the directions follow pdf_escape_from (cos θ/π on
+// the normal's side; the hemisphere light's dark half gives no sample, density 0 there), and
+// each sample reports that density.
+#[test]
+fn chi2_infinite_lights_cosine_about_the_normal() {
+    let level = sidak(ALPHA, tests_count());
+    let s = SceneBuilder::new().build(AccelKind::None);
+    let sp = ShadingPoint {
+        p: Point3::ORIGIN,
+        n: Vec3::new(-0.4, 0.2, 0.9).normalize(),
+        reflect_only: true,
+    };
+    let mut failures = Vec::new();
+    for (name, light) in infinite_lights() {
+        let t = Chi2 {
+            name,
+            grid: Grid::new(sp.n, 1.0, ROWS),
+            samples: SAMPLES,
+            seed: seed(name),
+            expected_mass: matches!(light, Light::Environment(_)).then_some(1.0),
+            level,
+        };
+        match t.run(
+            |u| {
+                light
+                    .sample_from(
+                        &s.geometry,
+                        &s.emissions,
+                        &sp,
+                        [u[0], u[1]],
+                        &Wavelengths::Rgb,
+                    )
+                    .map(|ls| (ls.wi, ls.pdf))
+            },
+            |d| {
+                if light.escaped(d, &Wavelengths::Rgb).is_black() {
+                    0.0
+                } else {
+                    light.pdf_escape_from(d, &sp)
+                }
+            },
+        ) {
+            Ok(r) => println!("{name}: p-value {:.3e}", r.p_value),
+            Err(e) => failures.push(e),
+        }
+        // A BSDF that also transmits: the light's own (uniform) sampling.
+        let both = ShadingPoint {
+            reflect_only: false,
+            ..sp
+        };
+        let d = Vec3::new(0.3, -0.2, -0.9).normalize();
+        assert_eq!(light.pdf_escape_from(d, &both), light.pdf_escape(d));
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A scene with a rectangle light, a point light, a spot light, a distant light and a
+/// constant environment.
+fn many_lights() -> Scene {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+    let em = b.add_emission(Emission {
+        radiance: Texture::Uniform(Rgb::splat(4.0)),
+        two_sided: false,
+    });
+    b.add_shape(Shape::Parallelogram(rectangle()), m, Some(em));
+    let c = Components::from_intensity(Rgb::splat(1.0));
+    b.add_light(Light::Point(
+        PointLight {
+            position: Point3::new(1.0, 2.0, 0.5),
+            intensity: Rgb::splat(5.0),
+            spectrum: None,
+            falloff: Falloff::INVERSE_SQUARE,
+        },
+        c,
+    ));
+    b.add_light(Light::Spot(
+        SpotLight {
+            position: Point3::new(-1.0, 0.0, 3.0),
+            axis: Vec3::new(0.0, 0.0, -1.0),
+            intensity: Rgb::splat(20.0),
+            spectrum: None,
+            cos_cutoff: 0.9,
+            profile: SpotProfile::Linear(0.95),
+            falloff: Falloff::INVERSE_SQUARE,
+            pattern: None,
+        },
+        c,
+    ));
+    b.add_light(Light::Distant(
+        DistantLight {
+            direction: Vec3::new(0.2, -0.3, -1.0).normalize(),
+            irradiance: Rgb::splat(1.5),
+            spectrum: None,
+        },
+        c,
+    ));
+    b.add_light(Light::Environment(Environment::new(
+        Texture::Uniform(Rgb::splat(0.3)),
+        Transform::IDENTITY,
+    )));
+    b.build(AccelKind::None)
+}
+
+// The importance-based choice: the probabilities sum to 1, `pick` reports the probability
+// `pmf` recomputes (what MIS uses at an emitter hit), a stratified sweep of the number picks
+// each light with that frequency, and the rescaled number is uniform within each share.
+#[test]
+fn light_choice_follows_its_probabilities() {
+    let s = many_lights();
+    let lights = &s.lights[..];
+    assert_eq!(lights.len(), 5);
+    assert!(!s.light_selector.is_uniform());
+    let mut rng = Pcg32::new(3, 4);
+    let n_points = 200;
+    let sweep = 20_000;
+    for k in 0..n_points {
+        let p = Point3::new(
+            4.0 * rng.next_f32() - 2.0,
+            4.0 * rng.next_f32() - 2.0,
+            4.0 * rng.next_f32() - 1.0,
+        );
+        let n = Vec3::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        )
+        .normalize();
+        let sp = ShadingPoint {
+            p,
+            n,
+            reflect_only: k % 2 == 0,
+        };
+        let pmf: Vec<f32> = (0..lights.len())
+            .map(|i| s.light_selector.pmf(lights, &sp, i))
+            .collect();
+        let total: f32 = pmf.iter().sum();
+        if total == 0.0 {
+            // No light can reach the point: no light sample.
+            assert!(s.light_selector.pick(lights, &sp, 0.5).is_none());
+            continue;
+        }
+        assert!((total - 1.0).abs() < 1e-5, "{sp:?}: Σ pmf = {total}");
+        let mut count = vec![0usize; lights.len()];
+        let mut mean_u = vec![0f64; lights.len()];
+        for j in 0..sweep {
+            let u = (j as f32 + 0.5) / sweep as f32;
+            let (i, prob, v) = s.light_selector.pick(lights, &sp, u).unwrap();
+            assert_eq!(prob, pmf[i], "{sp:?}: light {i}");
+            assert!((0.0..1.0).contains(&v));
+            count[i] += 1;
+            mean_u[i] += v as f64;
+        }
+        for i in 0..lights.len() {
+            let f = count[i] as f64 / sweep as f64;
+            assert!(
+                (f - pmf[i] as f64).abs() <= 2.0 / sweep as f64,
+                "{sp:?}: light {i} picked {f}, pmf {}",
+                pmf[i]
+            );
+            if count[i] > 100 {
+                let m = mean_u[i] / count[i] as f64;
+                assert!((m - 0.5).abs() < 0.01, "light {i}: mean rescaled u {m}");
+            }
+        }
+    }
+}
+
+// A light that cannot reach a point gets no share there: a one-sided rectangle seen from
+// behind (beyond its bounding sphere), a point light below a reflecting surface's horizon, a
+// spot light outside its cone; nor does a constant environment beside other lights (BSDF
+// sampling finds it as well as light sampling would).
+#[test]
+fn lights_that_cannot_reach_a_point_are_not_picked() {
+    let s = many_lights();
+    let lights = &s.lights[..];
+    let r = rectangle();
+    let behind = r.p + r.v * 0.5 + r.w * 0.5 - r.normal().to_vec() * 3.0;
+    let cases = [
+        (0, behind, Vec3::Z, false),
+        (
+            1,
+            Point3::ORIGIN,
+            (Point3::ORIGIN - Point3::new(1.0, 2.0, 0.5)).normalize(),
+            true,
+        ),
+        (2, Point3::new(3.0, 3.0, 0.0), Vec3::Z, false),
+        // The constant environment: left to BSDF sampling everywhere.
+        (4, Point3::ORIGIN, Vec3::Z, true),
+        (4, Point3::new(1.0, -1.0, 0.5), Vec3::X, false),
+    ];
+    for (i, p, n, reflect_only) in cases {
+        let sp = ShadingPoint { p, n, reflect_only };
+        assert_eq!(s.light_selector.pmf(lights, &sp, i), 0.0, "light {i}");
+        for j in 0..100 {
+            let u = (j as f32 + 0.5) / 100.0;
+            // (No light at all may reach the point.)
+            if let Some((k, _, _)) = s.light_selector.pick(lights, &sp, u) {
+                assert_ne!(k, i);
+            }
+        }
+    }
+}
