@@ -283,7 +283,7 @@ fn many_lights() -> Scene {
             intensity: Rgb::splat(20.0),
             spectrum: None,
             cos_cutoff: 0.9,
-            profile: SpotProfile::Linear(0.95),
+            profile: SpotProfile::linear(0.95, 0.9),
             falloff: Falloff::INVERSE_SQUARE,
             pattern: None,
         },

@@ -808,7 +808,11 @@ fn emitters() {
     assert!(s.position.approx_eq(Point3::new(0.0, 4.0, 0.0), 1e-6) && close(s.axis, -Vec3::Y));
     // beam_width defaults to 3/4 of the cut-off angle.
     assert!((s.cos_cutoff - 30f32.to_radians().cos()).abs() < 1e-6);
-    assert_eq!(s.profile, SpotProfile::Linear(22.5f32.to_radians().cos()));
+    let SpotProfile::Linear { cos_beam, .. } = s.profile else {
+        panic!("{:?}", s.profile)
+    };
+    assert!((cos_beam - 22.5f32.to_radians().cos()).abs() < 1e-6);
+    assert_eq!(s.profile, SpotProfile::linear(cos_beam, s.cos_cutoff));
     let Light::Distant(d, _) = &lights[2] else {
         panic!()
     };

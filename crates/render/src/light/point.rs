@@ -55,8 +55,28 @@ pub enum SpotProfile {
     /// The lecture's (ω·s)^k.
     Power(f32),
     /// Mitsuba's fall-off, linear in the angle from the beam width (full intensity) to the
-    /// cut-off (zero): the cosine of the beam width.
-    Linear(f32),
+    /// cut-off (zero): see [`SpotProfile::linear`].
+    Linear {
+        /// cos of the beam width.
+        cos_beam: f32,
+        /// The beam width (radians).
+        beam: f32,
+        /// The cut-off angle (radians).
+        cutoff: f32,
+    },
+}
+
+impl SpotProfile {
+    /// Mitsuba's linear fall-off between the beam width and the cut-off angle, given by their
+    /// cosines (`cos_cutoff` is the light's [`SpotLight::cos_cutoff`]): both angles are
+    /// computed here once rather than at every evaluation.
+    pub fn linear(cos_beam: f32, cos_cutoff: f32) -> Self {
+        SpotProfile::Linear {
+            cos_beam,
+            beam: cos_beam.acos(),
+            cutoff: cos_cutoff.acos(),
+        }
+    }
 }
 
 /// A point light.
@@ -134,16 +154,16 @@ impl SpotLight {
         }
         match self.profile {
             SpotProfile::Power(k) => c.max(0.0).powf(k),
-            SpotProfile::Linear(cos_beam) => {
+            SpotProfile::Linear {
+                cos_beam,
+                beam,
+                cutoff,
+            } => {
                 if c >= cos_beam {
                     1.0
                 } else {
-                    let (a, b, x) = (
-                        self.cos_cutoff.acos(),
-                        cos_beam.acos(),
-                        c.clamp(-1.0, 1.0).acos(),
-                    );
-                    ((a - x) / (a - b)).clamp(0.0, 1.0)
+                    let x = c.clamp(-1.0, 1.0).acos();
+                    ((cutoff - x) / (cutoff - beam)).clamp(0.0, 1.0)
                 }
             }
         }
@@ -194,7 +214,7 @@ mod tests {
         let outside = Vec3::new(31f32.to_radians().sin(), 0.0, 31f32.to_radians().cos());
         assert_eq!(s.profile(outside), 0.0);
         let m = SpotLight {
-            profile: SpotProfile::Linear(20f32.to_radians().cos()),
+            profile: SpotProfile::linear(20f32.to_radians().cos(), s.cos_cutoff),
             ..s
         };
         assert_eq!(m.profile(Vec3::Z), 1.0);

@@ -60,7 +60,7 @@ impl<'t> Loader<'t> {
                             intensity,
                             spectrum,
                             cos_cutoff: cutoff.to_radians().cos() as f32,
-                            profile: SpotProfile::Linear(beam.to_radians().cos() as f32),
+                            profile: SpotProfile::linear(beam.to_radians().cos() as f32, cutoff.to_radians().cos() as f32),
                             falloff: Falloff::INVERSE_SQUARE,
                             pattern,
                         },
