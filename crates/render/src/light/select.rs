@@ -173,7 +173,7 @@ impl LightSelector {
     }
 
     /// The importance of light `i` at `sp` (see the module's documentation).
-    #[inline]
+    #[inline(always)]
     fn importance(&self, lights: &[Light], i: usize, sp: &ShadingPoint) -> f32 {
         let v = match self.bounds[i] {
             Bound::Exact => match &lights[i] {
