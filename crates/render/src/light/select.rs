@@ -227,8 +227,10 @@ impl LightSelector {
     #[inline(always)]
     pub fn pick(&self, lights: &[Light], sp: &ShadingPoint, u: f32) -> Option<(usize, f32, f32)> {
         let n = lights.len();
-        if n == 0 {
-            return None;
+        match n {
+            0 => return None,
+            1 => return Some((0, 1.0, u)),
+            _ => {}
         }
         if self.bounds.len() != n {
             let pick = ((u * n as f32) as usize).min(n - 1);
