@@ -403,3 +403,42 @@ fn lights_that_cannot_reach_a_point_are_not_picked() {
         }
     }
 }
+
+/// A rectangle light beside a constant sky: the sky is left to BSDF sampling, so the
+/// rectangle is picked every time, with probability 1 and the number unchanged, wherever it
+/// could contribute; the MIS probabilities agree.
+#[test]
+fn a_sole_light_beside_a_constant_sky_is_always_picked() {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+    let em = b.add_emission(Emission {
+        radiance: Texture::Uniform(Rgb::splat(2.0)),
+        two_sided: false,
+    });
+    b.add_shape(Shape::Parallelogram(rectangle()), m, Some(em));
+    b.add_light(Light::Environment(Environment::new(
+        Texture::Uniform(Rgb::splat(0.4)),
+        Transform::IDENTITY,
+    )));
+    let s = b.build(AccelKind::None);
+    let lights = &s.lights[..];
+    let rect = (0..lights.len())
+        .find(|&i| matches!(lights[i], Light::Area(_)))
+        .unwrap();
+    let sky = 1 - rect;
+    let r = rectangle();
+    let front = r.p + r.v * 0.5 + r.w * 0.5 + r.normal().to_vec() * 2.0;
+    for (p, n) in [(front, -r.normal().to_vec()), (Point3::ORIGIN, Vec3::Z)] {
+        let sp = ShadingPoint {
+            p,
+            n,
+            reflect_only: true,
+        };
+        assert_eq!(s.light_selector.pmf(lights, &sp, rect), 1.0);
+        assert_eq!(s.light_selector.pmf(lights, &sp, sky), 0.0);
+        for j in 0..100 {
+            let u = (j as f32 + 0.5) / 100.0;
+            assert_eq!(s.light_selector.pick(lights, &sp, u), Some((rect, 1.0, u)));
+        }
+    }
+}

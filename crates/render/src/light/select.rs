@@ -26,7 +26,9 @@
 //! The cosine at the point is taken on the side of the outgoing direction when the BSDF only
 //! reflects, and on either side otherwise. A light of importance 0 is never sampled; that costs
 //! no bias because multiple importance sampling then gives BSDF sampling its full weight. With
-//! more lights, one light, or emissive shapes alone, the choice is uniform. [`LightSelector::pmf`] recomputes the
+//! more lights, one light, or emissive shapes alone, the choice is uniform. When a single light
+//! has any importance (the others being constant skies), it is picked without evaluating it:
+//! where its importance is 0 it cannot contribute either. [`LightSelector::pmf`] recomputes the
 //! probability with which the vertex a path left picked a light, for the MIS weights of emitters
 //! that BSDF sampling finds.
 
@@ -105,6 +107,11 @@ enum Bound {
 pub struct LightSelector {
     /// One bound per light; empty for the uniform choice.
     bounds: Vec<Bound>,
+    /// The one light with any importance when every other one has none anywhere (constant
+    /// skies beside it): it is chosen without evaluating the importances. Where its own
+    /// importance is 0 it can contribute nothing either (seen from behind, or below a
+    /// reflecting surface's horizon), neither by a light sample nor by BSDF sampling.
+    sole: Option<usize>,
 }
 
 impl LightSelector {
@@ -163,8 +170,19 @@ impl LightSelector {
                     }
                 }
             })
+            .collect::<Vec<_>>();
+        let lit: Vec<usize> = (0..bounds.len())
+            .filter(|&i| !matches!(bounds[i], Bound::Infinite(e) if e == 0.0))
             .collect();
-        Self { bounds }
+        let sole = match lit[..] {
+            [k] => match bounds[k] {
+                Bound::Exact => Some(k),
+                Bound::Shape { phi, .. } if phi > 0.0 => Some(k),
+                _ => None,
+            },
+            _ => None,
+        };
+        Self { bounds, sole }
     }
 
     /// True when lights are chosen uniformly.
@@ -241,6 +259,9 @@ impl LightSelector {
             };
             return Some((pick, 1.0 / n as f32, v));
         }
+        if let Some(k) = self.sole {
+            return Some((k, 1.0, u));
+        }
         self.pick_by_importance(lights, sp, u)
     }
 
@@ -288,6 +309,9 @@ impl LightSelector {
         let n = lights.len();
         if self.bounds.len() != n {
             return if n == 0 { 0.0 } else { 1.0 / n as f32 };
+        }
+        if let Some(k) = self.sole {
+            return if i == k { 1.0 } else { 0.0 };
         }
         self.pmf_by_importance(lights, sp, i)
     }
