@@ -171,11 +171,10 @@ impl LightSelector {
                 }
             })
             .collect::<Vec<_>>();
-        let lit: Vec<usize> = (0..bounds.len())
-            .filter(|&i| !matches!(bounds[i], Bound::Infinite(e) if e == 0.0))
-            .collect();
-        let sole = match lit[..] {
-            [k] => match bounds[k] {
+        let mut lit =
+            (0..bounds.len()).filter(|&i| !matches!(bounds[i], Bound::Infinite(e) if e == 0.0));
+        let sole = match (lit.next(), lit.next()) {
+            (Some(k), None) => match bounds[k] {
                 Bound::Exact => Some(k),
                 Bound::Shape { phi, .. } if phi > 0.0 => Some(k),
                 _ => None,

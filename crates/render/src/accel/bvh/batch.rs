@@ -134,7 +134,7 @@ impl Bvh {
         stats: &mut RayStats,
     ) {
         *hits = [None; BATCH];
-        if self.flat_prims.is_empty() && self.flat_rest.is_empty() {
+        if !self.is_flat() {
             if let Some(c) = self.packet_for(level, rays) {
                 return self.intersect_packet(level, geometry, rays, c, hits, stats);
             }
@@ -193,7 +193,7 @@ impl Bvh {
         rays: &RayBatch,
         stats: &mut RayStats,
     ) -> u32 {
-        if self.flat_prims.is_empty() && self.flat_rest.is_empty() {
+        if !self.is_flat() {
             if let Some(c) = self.packet_for(level, rays) {
                 return self.occluded_packet(level, geometry, rays, c, stats);
             }
