@@ -7,8 +7,8 @@ mod support;
 
 use candela_render::accel::AccelKind;
 use candela_render::integrator::{Integrator, Path, SampleBatch, SAMPLE_QUEUE};
-use candela_render::light::{Components, Light, PointLight};
-use candela_render::material::Material;
+use candela_render::light::{Components, Emission, Light, PointLight};
+use candela_render::material::{Material, Model};
 use candela_render::math::{Point3, Ray, Transform, Vec3};
 use candela_render::sampling::{Pcg32, Sampler, SamplerKind};
 use candela_render::shape::{Mesh, Shape, Sphere};
@@ -65,9 +65,93 @@ fn large_scene() -> Scene {
     scene
 }
 
+/// The Cornell box with every kind of vertex a batch shades: two-sided diffuse walls (seen
+/// from behind too), a mirror, a plastic block, the one-sided ceiling light, a small two-sided
+/// light, a textured (checkered) light, and a point light, so that lights are chosen by their
+/// importance and sampled both by the Lambert lanes and by the lights themselves.
+fn mixed_scene(spectral: bool) -> Scene {
+    let base = support::radiosity::cornell(AccelKind::Bvh);
+    let mut b = SceneBuilder::new();
+    for (i, mat) in base.materials.iter().enumerate() {
+        let mut mat = mat.clone();
+        if i % 2 == 0 {
+            mat.two_sided = true;
+        }
+        b.add_material(mat);
+    }
+    let mirror = b.add_material(Material::two_sided(Model::Specular {
+        reflectance: Texture::Uniform(Rgb::splat(0.9)),
+    }));
+    let plastic = b.add_material(Material::one_sided(Model::Plastic {
+        kd: Texture::Uniform(Rgb::new(0.2, 0.4, 0.6)),
+        ks: Texture::Uniform(Rgb::splat(1.0)),
+        eta: 1.5,
+        nonlinear: false,
+    }));
+    let e = b.add_emission(base.emissions[0].clone());
+    for (i, o) in base.geometry.objects().iter().enumerate() {
+        let mat = match i {
+            7 => mirror,
+            6 => plastic,
+            _ => o.props.material,
+        };
+        b.add_shape(o.shape.clone(), mat, o.props.emission.map(|_| e));
+    }
+    let white = base.geometry.objects()[0].props.material;
+    let two_sided = b.add_emission(Emission {
+        radiance: Texture::Uniform(Rgb::new(3.0, 5.0, 4.0)),
+        two_sided: true,
+    });
+    b.add_shape(
+        support::radiosity::para([-0.6, 0.2, -0.3], [0.2, 0.0, 0.0], [0.0, 0.15, 0.1]),
+        white,
+        Some(two_sided),
+    );
+    let checkered = b.add_emission(Emission {
+        radiance: Texture::Checkered {
+            c1: Rgb::new(4.0, 1.0, 1.0),
+            c2: Rgb::new(1.0, 1.0, 4.0),
+            steps: [4.0, 4.0],
+            offset: [0.0, 0.0],
+        },
+        two_sided: false,
+    });
+    b.add_shape(
+        support::radiosity::para([0.5, 0.6, 0.2], [0.0, -0.2, 0.0], [0.0, 0.0, -0.2]),
+        white,
+        Some(checkered),
+    );
+    b.add_light(Light::Point(
+        PointLight {
+            position: Point3::new(0.3, 0.8, 0.5),
+            intensity: Rgb::splat(0.4),
+            spectrum: None,
+            falloff: Default::default(),
+        },
+        Components::from_intensity(Rgb::splat(0.4)),
+    ));
+    b.camera(base.camera);
+    let mut scene = b.build(AccelKind::Bvh);
+    if spectral {
+        scene.prepare_spectral();
+    }
+    scene
+}
+
 /// Samples `first..last` of pixel (x, y) of a 32 × 32 image, traced as one queue and one by
 /// one: the same radiance and wavelengths, bit for bit.
-fn check(scene: &Scene, (x, y): (usize, usize), (first, last): (u32, u32), spp: u32) {
+fn check(scene: &Scene, pixel: (usize, usize), range: (u32, u32), spp: u32) {
+    check_in(scene, pixel, range, spp, false);
+}
+
+/// [`check`], with four sampled wavelengths per path when `spectral`.
+fn check_in(
+    scene: &Scene,
+    (x, y): (usize, usize),
+    (first, last): (u32, u32),
+    spp: u32,
+    spectral: bool,
+) {
     let path = Path {
         max_depth: Some(8),
         rr_depth: 2,
@@ -79,27 +163,31 @@ fn check(scene: &Scene, (x, y): (usize, usize), (first, last): (u32, u32), spp: 
     let n = (last - first) as usize;
     let mut rays = vec![Ray::new(Point3::ORIGIN, Vec3::X); n];
     let mut cursors = Vec::new();
+    let mut lambdas = vec![Wavelengths::Rgb; n];
     for (k, ray) in rays.iter_mut().enumerate() {
         let [sx, sy] = sampler.pixel_sample(first + k as u32);
         *ray = scene
             .camera
             .ray((x as f32 + sx) / 32.0, 1.0 - (y as f32 + sy) / 32.0);
+        if spectral {
+            lambdas[k] = Wavelengths::sample(sampler.next_1d());
+        }
         cursors.push(sampler.cursor());
     }
-    let singles: Vec<SampledSpectrum> = (0..n)
+    let singles: Vec<(SampledSpectrum, Wavelengths)> = (0..n)
         .map(|k| {
             sampler.resume(cursors[k]);
-            let mut lambda = Wavelengths::Rgb;
-            path.radiance(
+            let mut lambda = lambdas[k];
+            let l = path.radiance(
                 scene,
                 &rays[k],
                 &mut lambda,
                 &mut sampler,
                 &mut RayStats::default(),
-            )
+            );
+            (l, lambda)
         })
         .collect();
-    let mut lambdas = vec![Wavelengths::Rgb; n];
     let mut out = vec![SampledSpectrum::ZERO; n];
     let batch = SampleBatch {
         rays: &rays,
@@ -117,10 +205,11 @@ fn check(scene: &Scene, (x, y): (usize, usize), (first, last): (u32, u32), spp: 
     for k in 0..n {
         assert_eq!(
             out[k].0.map(f32::to_bits),
-            singles[k].0.map(f32::to_bits),
+            singles[k].0 .0.map(f32::to_bits),
             "pixel ({x}, {y}) sample {}",
             first as usize + k
         );
+        assert_eq!(lambdas[k], singles[k].1);
         lit += !out[k].is_black() as usize;
     }
     assert!(lit > 0, "pixel ({x}, {y}): nothing lit, nothing compared");
@@ -138,6 +227,24 @@ fn small_scene_batches_refill_their_lanes_and_agree_with_single_paths() {
     ] {
         assert!((range.1 - range.0) as usize <= SAMPLE_QUEUE);
         check(&scene, pixel, range, spp);
+    }
+}
+
+#[test]
+fn every_kind_of_vertex_in_a_batch_agrees_with_single_paths_in_rgb_and_spectral_mode() {
+    for spectral in [false, true] {
+        let scene = mixed_scene(spectral);
+        assert!(scene.accel.refills_lanes());
+        for (pixel, range, spp) in [
+            ((16, 16), (0, 64), 64),
+            ((5, 20), (0, 64), 64),
+            ((25, 9), (3, 40), 64),
+            ((12, 28), (60, 100), 128),
+            ((28, 3), (0, 64), 64),
+            ((9, 9), (0, 64), 64),
+        ] {
+            check_in(&scene, pixel, range, spp, spectral);
+        }
     }
 }
 

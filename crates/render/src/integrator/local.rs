@@ -11,7 +11,7 @@
 use super::Integrator;
 use crate::interaction::SurfaceInteraction;
 use crate::light::{Light, Target};
-use crate::math::{Frame, Ray, Vec3, PI};
+use crate::math::{Frame, Normal3, Point3, Ray, Vec3, PI};
 use crate::sampling::sampler::cmj;
 use crate::sampling::{warp, Sampler};
 use crate::scene::Scene;
@@ -59,11 +59,17 @@ pub(crate) fn shadowed(
 /// surface point.
 #[inline(always)]
 pub(crate) fn shadow_ray(si: &SurfaceInteraction, wi: Vec3, target: Target) -> Ray {
+    shadow_ray_from(si.p, si.n, wi, target)
+}
+
+/// [`shadow_ray`] from the point `p` with the unit geometric normal `n`.
+#[inline(always)]
+pub(crate) fn shadow_ray_from(p: Point3, n: Normal3, wi: Vec3, target: Target) -> Ray {
     match target {
-        Target::Point(p) => si.spawn_ray_to(p),
+        Target::Point(q) => Ray::spawn_to(p, n, q),
         // Both normals are unit normals (of an interaction and of a light's surface).
-        Target::Surface(p, n) => Ray::spawn_between_unit(si.p, si.n, p, n),
-        Target::Infinite => si.spawn_ray(wi),
+        Target::Surface(q, nq) => Ray::spawn_between_unit(p, n, q, nq),
+        Target::Infinite => Ray::spawn_unit(p, n, wi),
     }
 }
 

@@ -73,6 +73,9 @@ pub(crate) trait Wide: Copy {
     fn bits(self, m: Self::M) -> u32;
     /// The mask with lane i set where bit i of `b` is.
     fn mask(self, b: u32) -> Self::M;
+    /// Each lane of `x` moved by `k` (truncated to an integer, |k| < 2³¹) units in the last
+    /// place, away from zero for k > 0: [`super::F4::move_ulps`] on sixteen lanes.
+    fn move_ulps(self, x: Self::V, k: Self::V) -> Self::V;
 }
 
 /// An implementation over `K` registers of `L` lanes each (the pattern of the x86 ones).
@@ -83,7 +86,8 @@ macro_rules! split_impl {
      add = $add:path, sub = $sub:path, mul = $mul:path, div = $div:path, sqrt = $sqrt:path,
      and = $and:path, or = $or:path, andnot = $andnot:path, xor = $xor:path,
      movemask = $movemask:path, blend = $blend:path,
-     lt = $lt:path, le = $le:path, eq = $eq:path, ne = $ne:path) => {
+     lt = $lt:path, le = $le:path, eq = $eq:path, ne = $ne:path,
+     move_ulps = $move_ulps:path) => {
         // SAFETY (every block below): the type exists only where its instructions are present
         // (see the module's header); loads and stores stay within the `[f32; 16]`.
         impl Wide for $name {
@@ -231,6 +235,13 @@ macro_rules! split_impl {
                 }
                 self.load(&a)
             }
+            #[inline(always)]
+            fn move_ulps(self, mut x: Self::V, k: Self::V) -> Self::V {
+                for i in 0..$k {
+                    x[i] = unsafe { $move_ulps(x[i], k[i]) };
+                }
+                x
+            }
         }
     };
 }
@@ -243,6 +254,17 @@ mod x86 {
     /// Sixteen lanes as four SSE registers (SSE2 only: blends by and/andnot/or).
     #[derive(Clone, Copy, Debug)]
     pub(crate) struct Sse4;
+
+    #[inline(always)]
+    unsafe fn sse_move_ulps(x: __m128, k: __m128) -> __m128 {
+        unsafe {
+            let ki = _mm_cvttps_epi32(k);
+            let bits = _mm_castps_si128(x);
+            let sign = _mm_srai_epi32::<31>(bits);
+            let adj = _mm_sub_epi32(_mm_xor_si128(ki, sign), sign);
+            _mm_castsi128_ps(_mm_add_epi32(bits, adj))
+        }
+    }
 
     #[inline(always)]
     unsafe fn sse_blend(b: __m128, a: __m128, m: __m128) -> __m128 {
@@ -271,7 +293,8 @@ mod x86 {
         lt = _mm_cmplt_ps,
         le = _mm_cmple_ps,
         eq = _mm_cmpeq_ps,
-        ne = _mm_cmpneq_ps
+        ne = _mm_cmpneq_ps,
+        move_ulps = sse_move_ulps
     );
 
     /// Sixteen lanes as two AVX registers.
@@ -287,6 +310,16 @@ mod x86 {
         }
     }
 
+    #[inline(always)]
+    unsafe fn move_ulps256(x: __m256, k: __m256) -> __m256 {
+        unsafe {
+            let ki = _mm256_cvttps_epi32(k);
+            let bits = _mm256_castps_si256(x);
+            let sign = _mm256_srai_epi32::<31>(bits);
+            let adj = _mm256_sub_epi32(_mm256_xor_si256(ki, sign), sign);
+            _mm256_castsi256_ps(_mm256_add_epi32(bits, adj))
+        }
+    }
     #[inline(always)]
     unsafe fn lt256(a: __m256, b: __m256) -> __m256 {
         unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(a, b) }
@@ -326,7 +359,8 @@ mod x86 {
         lt = lt256,
         le = le256,
         eq = eq256,
-        ne = ne256
+        ne = ne256,
+        move_ulps = move_ulps256
     );
 
     /// Sixteen lanes as one AVX-512 register, masks as `__mmask16`.
@@ -440,6 +474,16 @@ mod x86 {
         fn mask(self, b: u32) -> __mmask16 {
             b as __mmask16
         }
+        #[inline(always)]
+        fn move_ulps(self, x: __m512, k: __m512) -> __m512 {
+            unsafe {
+                let ki = _mm512_cvttps_epi32(k);
+                let bits = _mm512_castps_si512(x);
+                let sign = _mm512_srai_epi32::<31>(bits);
+                let adj = _mm512_sub_epi32(_mm512_xor_si512(ki, sign), sign);
+                _mm512_castsi512_ps(_mm512_add_epi32(bits, adj))
+            }
+        }
     }
 }
 
@@ -515,5 +559,11 @@ impl Wide for Portable {
     }
     fn mask(self, b: u32) -> u32 {
         b & 0xffff
+    }
+    fn move_ulps(self, x: [f32; 16], k: [f32; 16]) -> [f32; 16] {
+        std::array::from_fn(|i| {
+            let (k, b) = (k[i] as i32, x[i].to_bits() as i32);
+            f32::from_bits(b.wrapping_add(if b < 0 { -k } else { k }) as u32)
+        })
     }
 }

@@ -8,15 +8,22 @@
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
 //! (The course's branching estimator is [`super::CoursePath`].)
 
+mod lambert_lanes;
+
 use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
+use crate::light::{AreaShape, Light};
+use crate::material::BsdfModel;
+use crate::math::Point2;
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::spectrum::RgbRole;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
+use lambert_lanes::{LambertLanes, LambertVertex, LaneLight};
 
 /// The unidirectional path tracer with next-event estimation and MIS.
 #[derive(Clone, Copy, Debug)]
@@ -85,6 +92,10 @@ impl Path {
     /// The vertex where `st.ray` ends (`hit`, or nothing when it escapes): adds the emission
     /// found there, samples a light (the shadow ray is the caller's to test), samples the
     /// next direction and plays Russian roulette.
+    ///
+    /// With `defer` (the batch's Lambert lanes and this path's lane), a vertex at a Lambert
+    /// surface stops once it has drawn its numbers and sampled a light, and leaves the rest to
+    /// [`LambertLanes::shade`]: it then returns `None`.
     #[inline(always)]
     fn vertex(
         &self,
@@ -92,11 +103,12 @@ impl Path {
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-    ) -> VertexOutcome {
-        let done = VertexOutcome {
+        defer: Option<(&mut LambertLanes, usize)>,
+    ) -> Option<VertexOutcome> {
+        let done = Some(VertexOutcome {
             shadow: None,
             alive: false,
-        };
+        });
         let max_depth = self.max_depth.unwrap_or(u32::MAX);
         let lights = &scene.lights[..];
         let Some(hit) = hit else {
@@ -162,34 +174,50 @@ impl Path {
             reflect_only: bsdf.reflects_only(),
         };
 
-        // Next-event estimation: one light, chosen by its importance at the shading point (see
-        // `LightSelector`) with the first number of the light's own pair, which is then
-        // rescaled within the light's share, so that each light keeps a stratified share of
-        // the pixel's samples (a separate number for the choice would give each light a
-        // random, unstratified subset of them).
+        if let (Some((lanes, lane)), BsdfModel::Lambert(r)) = (defer, &bsdf.model) {
+            // The numbers in the order the scalar vertex below draws them (the roulette's
+            // even where the path could end before it: it then goes unused).
+            let light = self.lane_light(scene, st, &sp, sampler);
+            let _u1 = sampler.next_1d();
+            let u2 = sampler.next_2d();
+            let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
+            lanes.set(
+                lane,
+                &LambertVertex {
+                    p: si.p,
+                    ng: si.n,
+                    frame: bsdf.frame,
+                    wo_z: wo.z,
+                    flip,
+                    sp,
+                    r: *r,
+                    beta: st.beta,
+                    light,
+                    u2,
+                    u_rr,
+                    eta_scale: st.eta_scale,
+                },
+            );
+            return None;
+        }
+
+        // Next-event estimation (see `Path::sample_light`).
         let mut shadow = None;
         if !bsdf.is_delta() {
-            let mut u = sampler.next_2d();
-            if let Some((pick, pick_pdf, u0)) = scene.light_selector.pick(lights, &sp, u[0]) {
-                u[0] = u0;
-                let light = &lights[pick];
-                if let Some(ls) =
-                    light.sample_from(&scene.geometry, &scene.emissions, &sp, u, &st.lambda)
-                {
-                    let wi = bsdf.local_wi(ls.wi, flip);
-                    let f = bsdf.eval_local(wo, wi);
-                    if !f.is_black() {
-                        let pdf_light = pick_pdf * ls.pdf;
-                        let w = if ls.delta {
-                            1.0
-                        } else {
-                            power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
-                        };
-                        shadow = Some((
-                            super::local::shadow_ray(&si, ls.wi, ls.target),
-                            st.beta * f * ls.li * (w / pdf_light),
-                        ));
-                    }
+            if let Some((ls, pick_pdf)) = self.sample_light(scene, st, &sp, sampler) {
+                let wi = bsdf.local_wi(ls.wi, flip);
+                let f = bsdf.eval_local(wo, wi);
+                if !f.is_black() {
+                    let pdf_light = pick_pdf * ls.pdf;
+                    let w = if ls.delta {
+                        1.0
+                    } else {
+                        power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
+                    };
+                    shadow = Some((
+                        super::local::shadow_ray(&si, ls.wi, ls.target),
+                        st.beta * f * ls.li * (w / pdf_light),
+                    ));
                 }
             }
         }
@@ -198,17 +226,17 @@ impl Path {
         let u1 = sampler.next_1d();
         let u2 = sampler.next_2d();
         let Some(bs) = bsdf.sample_local(wo, flip, u1, u2) else {
-            return VertexOutcome {
+            return Some(VertexOutcome {
                 shadow,
                 alive: false,
-            };
+            });
         };
         st.beta *= bs.weight;
         if st.beta.is_black() {
-            return VertexOutcome {
+            return Some(VertexOutcome {
                 shadow,
                 alive: false,
-            };
+            });
         }
         st.prev_pdf = bs.pdf;
         st.prev_delta = bs.delta;
@@ -227,17 +255,81 @@ impl Path {
         if st.depth >= self.rr_depth {
             let q = (st.beta.max_component() * st.eta_scale).min(0.95);
             if !(sampler.next_1d() < q) {
-                return VertexOutcome {
+                return Some(VertexOutcome {
                     shadow,
                     alive: false,
-                };
+                });
             }
             st.beta /= q;
         }
-        VertexOutcome {
+        Some(VertexOutcome {
             shadow,
             alive: true,
+        })
+    }
+
+    /// [`Path::sample_light`] for a Lambert lane: a parallelogram light of uniform radiance is
+    /// left to [`LambertLanes::shade`] to sample; other lights are sampled here.
+    #[inline(always)]
+    fn lane_light<'s>(
+        &self,
+        scene: &'s Scene,
+        st: &PathState,
+        sp: &ShadingPoint,
+        sampler: &mut Sampler,
+    ) -> LaneLight<'s> {
+        let lights = &scene.lights[..];
+        let mut u = sampler.next_2d();
+        let Some((pick, pick_pdf, u0)) = scene.light_selector.pick(lights, sp, u[0]) else {
+            return LaneLight::None;
+        };
+        u[0] = u0;
+        let light = &lights[pick];
+        if let Light::Area(a) = light {
+            if let AreaShape::Parallelogram(q) = &a.shape {
+                let e = &scene.emissions[a.emission as usize];
+                if e.radiance.is_constant() {
+                    return LaneLight::Rect {
+                        q,
+                        inv_area: 1.0 / a.area,
+                        li: e.radiance.spectral(
+                            Point2::new(0.0, 0.0),
+                            &st.lambda,
+                            RgbRole::Emission,
+                        ),
+                        two_sided: e.two_sided,
+                        u,
+                        pick_pdf,
+                    };
+                }
+            }
         }
+        match light.sample_from(&scene.geometry, &scene.emissions, sp, u, &st.lambda) {
+            Some(ls) => LaneLight::Sample(ls.wi, ls.li, pick_pdf * ls.pdf, ls.delta, ls.target),
+            None => LaneLight::None,
+        }
+    }
+
+    /// Next-event estimation's light sample: one light, chosen by its importance at the
+    /// shading point (see `LightSelector`) with the first number of the light's own pair,
+    /// which is then rescaled within the light's share, so that each light keeps a stratified
+    /// share of the pixel's samples (a separate number for the choice would give each light a
+    /// random, unstratified subset of them). Gives the sample and the pick's probability.
+    #[inline(always)]
+    fn sample_light(
+        &self,
+        scene: &Scene,
+        st: &PathState,
+        sp: &ShadingPoint,
+        sampler: &mut Sampler,
+    ) -> Option<(crate::light::LightSample, f32)> {
+        let lights = &scene.lights[..];
+        let mut u = sampler.next_2d();
+        let (pick, pick_pdf, u0) = scene.light_selector.pick(lights, sp, u[0])?;
+        u[0] = u0;
+        lights[pick]
+            .sample_from(&scene.geometry, &scene.emissions, sp, u, &st.lambda)
+            .map(|ls| (ls, pick_pdf))
     }
 }
 
@@ -253,7 +345,9 @@ impl Integrator for Path {
         let mut st = PathState::new(camera_ray, *lambda);
         loop {
             let hit = scene.intersect(&st.ray, stats);
-            let out = self.vertex(scene, &mut st, hit, sampler);
+            let Some(out) = self.vertex(scene, &mut st, hit, sampler, None) else {
+                unreachable!("only a batch's lanes defer vertices");
+            };
             if let Some((ray, c)) = out.shadow {
                 if !scene.occluded(&ray, stats) {
                     st.l += c;
@@ -298,8 +392,12 @@ impl Integrator for Path {
         let mut hits = [None; BATCH];
         let mut pending = [SampledSpectrum::ZERO; BATCH];
         // Only the active lanes are read: the batches are filled, not cleared, at each step.
+        // `batch` holds each path's next ray from one step to the next; where the Lambert
+        // lanes put it there, the path's own copy is out of date (`stale`) until it is read.
         let mut batch = RayBatch::default();
         let mut shadows = RayBatch::default();
+        let mut lambert = LambertLanes::new();
+        let mut stale = 0u32;
         loop {
             if alive == 0 {
                 if next == n {
@@ -309,30 +407,59 @@ impl Integrator for Path {
                 let m = (n - next).min(BATCH);
                 for i in 0..m {
                     st[i] = PathState::new(&rays[next + i], lambdas[next + i]);
+                    batch.set(i, &rays[next + i]);
                     slot[i] = next + i;
                 }
                 next += m;
                 alive = (1u32 << m) - 1;
+                stale = 0;
             }
-            batch.active = 0;
-            for i in lanes(alive) {
-                batch.set(i, &st[i].ray);
-            }
+            batch.active = alive;
             scene.intersect_batch(&batch, &mut hits, stats);
             scene.geometry.prefetch_interactions(&hits, alive);
             shadows.active = 0;
             let mut ended = 0u32;
+            lambert.lanes = 0;
             for i in lanes(alive) {
                 let s = slot[i];
+                if stale >> i & 1 != 0 {
+                    st[i].ray = batch.ray(i);
+                }
                 sampler.resume(cursors[s]);
-                let o = self.vertex(scene, &mut st[i], hits[i], sampler);
+                let o = self.vertex(scene, &mut st[i], hits[i], sampler, Some((&mut lambert, i)));
                 cursors[s] = sampler.cursor();
+                let Some(o) = o else { continue };
                 if let Some((ray, c)) = o.shadow {
                     shadows.set(i, &ray);
                     pending[i] = c;
                 }
-                if !o.alive {
+                if o.alive {
+                    batch.set(i, &st[i].ray);
+                } else {
                     ended |= 1 << i;
+                }
+            }
+            stale = 0;
+            if lambert.lanes != 0 {
+                lambert.shade(&mut batch, &mut shadows, &mut pending);
+                for i in lanes(lambert.lanes) {
+                    let o = lambert.finish(i);
+                    if let Some((ray, c)) = o.shadow {
+                        shadows.set(i, &ray);
+                        pending[i] = c;
+                    }
+                    let st = &mut st[i];
+                    match o.next {
+                        Some((beta, pdf, sp)) => {
+                            st.beta = beta;
+                            st.prev_pdf = pdf;
+                            st.prev_delta = false;
+                            st.prev = sp;
+                            st.depth += 1;
+                            stale |= 1 << i;
+                        }
+                        None => ended |= 1 << i,
+                    }
                 }
             }
             if shadows.active != 0 {
@@ -347,6 +474,8 @@ impl Integrator for Path {
                 lambdas[slot[i]] = st[i].lambda;
                 if refill && next < n {
                     st[i] = PathState::new(&rays[next], lambdas[next]);
+                    batch.set(i, &rays[next]);
+                    stale &= !(1 << i);
                     slot[i] = next;
                     next += 1;
                     alive |= 1 << i;

@@ -1,0 +1,763 @@
+//! The Lambert vertices of a batch, shaded sixteen at once.
+//!
+//! [`super::Path::radiance_batch`] runs the start of every vertex lane by lane (the hit's
+//! interaction, the emission it finds, the BSDF, the numbers the vertex draws and the light
+//! sample). At a Lambert surface, the common case, it then leaves the rest of the vertex here:
+//! the BSDF's value and density for the light sample with the MIS weight of next-event
+//! estimation, the cosine-weighted sample of the next direction, the throughput and Russian
+//! roulette. [`LambertLanes::shade`] does these for all such lanes with the sixteen-lane
+//! operations of [`crate::simd::Wide`], and [`LambertLanes::finish`] makes each lane's rays.
+//!
+//! Every operation is the one the scalar vertex makes ([`crate::material::Bsdf`] with a Lambert
+//! model, [`crate::sampling::warp`], [`power_heuristic`](crate::sampling::warp::power_heuristic)),
+//! on the same operands in the same order, so each path gets the same bits as
+//! [`super::Path::radiance`] gives it alone (IEEE single precision, correctly rounded division
+//! and square root, no fused multiply-add; the NaN cases of `max`/`min` aside, which a finite
+//! throughput never meets).
+
+use crate::light::{ShadingPoint, Target};
+use crate::math::{Frame, Normal3, Point3, Ray, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON};
+use crate::shape::Parallelogram;
+use crate::simd::SimdLevel;
+use crate::simd::{Wide, WideKernel};
+use crate::spectrum::SampledSpectrum;
+
+/// Sixteen f32 lanes.
+type L = [f32; BATCH];
+const Z: L = [0.0; BATCH];
+
+/// The deferred Lambert vertices of a batch step, structure of arrays: lane i is the path in
+/// lane i of the batch.
+pub(super) struct LambertLanes {
+    /// The lanes in use.
+    pub(super) lanes: u32,
+    /// The shading point and its unit geometric normal.
+    p_x: [L; 3],
+    ng_x: [L; 3],
+    // Inputs: the shading frame, the outgoing direction's local z (mirrored when `flip`).
+    s: [L; 3],
+    t: [L; 3],
+    n: [L; 3],
+    wo_z: L,
+    flip: u32,
+    /// Reflectance and the throughput before the vertex.
+    r: [L; 4],
+    beta: [L; 4],
+    /// Lanes with a light sample; of those, the delta lights.
+    light: u32,
+    delta: u32,
+    /// The light sample: world direction, radiance, density including the pick.
+    light_wi: [L; 3],
+    li: [L; 4],
+    pdf_light: L,
+    /// Lanes whose light is a parallelogram of uniform radiance, sampled here: its corner,
+    /// edges and unit normal, 1/area, which of them emit on both sides, the light's numbers
+    /// and the pick's probability (the radiance is in `li`).
+    rect: u32,
+    q_p: [L; 3],
+    q_v: [L; 3],
+    q_w: [L; 3],
+    q_n: [L; 3],
+    inv_area: L,
+    two_sided: u32,
+    u_light: [L; 2],
+    pick_pdf: L,
+    /// The sampled points on those lights (the shadow rays' targets).
+    q_at: [L; 3],
+    /// The direction sample's numbers, the roulette number and where it is played.
+    u2: [L; 2],
+    u_rr: L,
+    roulette: u32,
+    eta_scale: L,
+    // Per-lane data the rays are made from.
+    p: [Point3; BATCH],
+    ng: [Normal3; BATCH],
+    target: [Target; BATCH],
+    sp: [ShadingPoint; BATCH],
+    // Outputs.
+    /// Lanes whose light sample adds `c` when unoccluded.
+    shadow: u32,
+    c: [L; 4],
+    /// Lanes whose path goes on, with the direction's density `pdf` and throughput
+    /// `beta_out`.
+    alive: u32,
+    pdf: L,
+    beta_out: [L; 4],
+}
+
+/// What the scalar part of a vertex hands over for one Lambert lane.
+pub(super) struct LambertVertex<'a> {
+    /// The hit point and its (unit) geometric normal.
+    pub p: Point3,
+    pub ng: Normal3,
+    /// The shading frame and the outgoing direction's local z, after mirroring.
+    pub frame: Frame,
+    pub wo_z: f32,
+    pub flip: bool,
+    /// The shading point (it becomes the path's previous vertex).
+    pub sp: ShadingPoint,
+    /// Reflectance and throughput.
+    pub r: SampledSpectrum,
+    pub beta: SampledSpectrum,
+    /// The light sample, or the light to sample here.
+    pub light: LaneLight<'a>,
+    /// The numbers of the direction sample and of the roulette (`None`: no roulette here).
+    pub u2: [f32; 2],
+    pub u_rr: Option<f32>,
+    pub eta_scale: f32,
+}
+
+/// Next-event estimation's light at a Lambert vertex.
+pub(super) enum LaneLight<'a> {
+    /// No light to sample.
+    None,
+    /// A light sample made by [`crate::light::Light::sample_from`]: direction, radiance, density
+    /// (the pick's probability included), whether the light is a delta light, shadow target.
+    Sample(Vec3, SampledSpectrum, f32, bool, Target),
+    /// A parallelogram light of uniform radiance `li`, to sample here with the numbers `u`
+    /// (the pick's probability `pick_pdf`).
+    Rect {
+        /// The light's shape.
+        q: &'a Parallelogram,
+        /// 1 / its area.
+        inv_area: f32,
+        /// Its radiance in the path's lanes.
+        li: SampledSpectrum,
+        /// Emits on both sides.
+        two_sided: bool,
+        /// The light's pair of numbers.
+        u: [f32; 2],
+        /// The pick's probability.
+        pick_pdf: f32,
+    },
+}
+
+/// What [`LambertLanes::finish`] gives for a lane: a shadow ray left to it with what it adds,
+/// and the path's next throughput, direction density and previous vertex (`None`: the path
+/// ends here).
+pub(super) struct LambertOutcome {
+    pub shadow: Option<(Ray, SampledSpectrum)>,
+    pub next: Option<(SampledSpectrum, f32, ShadingPoint)>,
+}
+
+impl LambertLanes {
+    /// No lanes.
+    pub(super) fn new() -> Self {
+        let o = Point3::ORIGIN;
+        Self {
+            lanes: 0,
+            p_x: [Z; 3],
+            ng_x: [Z; 3],
+            s: [Z; 3],
+            t: [Z; 3],
+            n: [Z; 3],
+            wo_z: Z,
+            flip: 0,
+            r: [Z; 4],
+            beta: [Z; 4],
+            light: 0,
+            delta: 0,
+            light_wi: [Z; 3],
+            li: [Z; 4],
+            pdf_light: Z,
+            rect: 0,
+            q_p: [Z; 3],
+            q_v: [Z; 3],
+            q_w: [Z; 3],
+            q_n: [Z; 3],
+            inv_area: Z,
+            two_sided: 0,
+            u_light: [Z; 2],
+            pick_pdf: Z,
+            q_at: [Z; 3],
+            u2: [Z; 2],
+            u_rr: Z,
+            roulette: 0,
+            eta_scale: Z,
+            p: [o; BATCH],
+            ng: [Normal3::new(0.0, 0.0, 1.0); BATCH],
+            target: [Target::Infinite; BATCH],
+            sp: [ShadingPoint::at(o); BATCH],
+            shadow: 0,
+            c: [Z; 4],
+            alive: 0,
+            pdf: Z,
+            beta_out: [Z; 4],
+        }
+    }
+
+    /// Puts lane `i`'s vertex in.
+    #[inline(always)]
+    pub(super) fn set(&mut self, i: usize, v: &LambertVertex) {
+        let bit = 1u32 << i;
+        self.lanes |= bit;
+        for (a, b) in [v.frame.s, v.frame.t, v.frame.n].into_iter().zip([
+            &mut self.s,
+            &mut self.t,
+            &mut self.n,
+        ]) {
+            b[0][i] = a.x;
+            b[1][i] = a.y;
+            b[2][i] = a.z;
+        }
+        self.p_x[0][i] = v.p.x;
+        self.p_x[1][i] = v.p.y;
+        self.p_x[2][i] = v.p.z;
+        self.ng_x[0][i] = v.ng.x;
+        self.ng_x[1][i] = v.ng.y;
+        self.ng_x[2][i] = v.ng.z;
+        self.wo_z[i] = v.wo_z;
+        self.flip = (self.flip & !bit) | if v.flip { bit } else { 0 };
+        for k in 0..4 {
+            self.r[k][i] = v.r.0[k];
+            self.beta[k][i] = v.beta.0[k];
+        }
+        self.light &= !bit;
+        self.delta &= !bit;
+        self.rect &= !bit;
+        self.two_sided &= !bit;
+        let set3 = |a: &mut [L; 3], x: f32, y: f32, z: f32| {
+            a[0][i] = x;
+            a[1][i] = y;
+            a[2][i] = z;
+        };
+        match v.light {
+            LaneLight::None => {}
+            LaneLight::Sample(wi, li, pdf, delta, target) => {
+                self.light |= bit;
+                if delta {
+                    self.delta |= bit;
+                }
+                set3(&mut self.light_wi, wi.x, wi.y, wi.z);
+                for k in 0..4 {
+                    self.li[k][i] = li.0[k];
+                }
+                self.pdf_light[i] = pdf;
+                self.target[i] = target;
+            }
+            LaneLight::Rect {
+                q,
+                inv_area,
+                li,
+                two_sided,
+                u,
+                pick_pdf,
+            } => {
+                self.rect |= bit;
+                if two_sided {
+                    self.two_sided |= bit;
+                }
+                set3(&mut self.q_p, q.p.x, q.p.y, q.p.z);
+                set3(&mut self.q_v, q.v.x, q.v.y, q.v.z);
+                set3(&mut self.q_w, q.w.x, q.w.y, q.w.z);
+                let n = q.normal();
+                set3(&mut self.q_n, n.x, n.y, n.z);
+                self.inv_area[i] = inv_area;
+                for k in 0..4 {
+                    self.li[k][i] = li.0[k];
+                }
+                self.u_light[0][i] = u[0];
+                self.u_light[1][i] = u[1];
+                self.pick_pdf[i] = pick_pdf;
+            }
+        }
+        self.u2[0][i] = v.u2[0];
+        self.u2[1][i] = v.u2[1];
+        self.roulette &= !bit;
+        if let Some(u) = v.u_rr {
+            self.roulette |= bit;
+            self.u_rr[i] = u;
+        }
+        self.eta_scale[i] = v.eta_scale;
+        self.p[i] = v.p;
+        self.ng[i] = v.ng;
+        self.sp[i] = v.sp;
+    }
+
+    /// Shades every lane in use (sixteen lanes at once, at the widest instruction set the CPU
+    /// has).
+    ///
+    /// The rays of the lanes whose path goes on go straight into `next`, and the shadow rays
+    /// to parallelogram lights into `shadows` (marked active there, with what they add in
+    /// `pending`); [`LambertLanes::finish`] gives the rest.
+    pub(super) fn shade(
+        &mut self,
+        next: &mut RayBatch,
+        shadows: &mut RayBatch,
+        pending: &mut [SampledSpectrum; BATCH],
+    ) {
+        self.shade_at(SimdLevel::detected(), next, shadows, pending);
+    }
+
+    /// [`LambertLanes::shade`] with the instructions of `level` (or the widest below it that
+    /// the CPU has).
+    pub(super) fn shade_at(
+        &mut self,
+        level: SimdLevel,
+        next: &mut RayBatch,
+        shadows: &mut RayBatch,
+        pending: &mut [SampledSpectrum; BATCH],
+    ) {
+        // Only the lanes in use count (the other lanes hold an earlier step's values).
+        let m = self.lanes;
+        for mask in [
+            &mut self.flip,
+            &mut self.light,
+            &mut self.delta,
+            &mut self.rect,
+            &mut self.two_sided,
+            &mut self.roulette,
+        ] {
+            *mask &= m;
+        }
+        crate::simd::run_wide_at(level, Shade(self, next, shadows));
+        for i in crate::math::lanes(self.shadow & self.rect) {
+            pending[i] = SampledSpectrum([self.c[0][i], self.c[1][i], self.c[2][i], self.c[3][i]]);
+        }
+    }
+
+    /// What is left of lane `i` once [`LambertLanes::shade`] has run: the shadow ray of a light
+    /// sampled by [`crate::light::Light::sample_from`], and the path's next throughput,
+    /// direction density and previous vertex (its ray is in the batch already).
+    #[inline(always)]
+    pub(super) fn finish(&self, i: usize) -> LambertOutcome {
+        let bit = 1u32 << i;
+        let shadow = (self.shadow & !self.rect & bit != 0).then(|| {
+            let wi = Vec3::new(
+                self.light_wi[0][i],
+                self.light_wi[1][i],
+                self.light_wi[2][i],
+            );
+            let c = SampledSpectrum([self.c[0][i], self.c[1][i], self.c[2][i], self.c[3][i]]);
+            let ray = crate::integrator::local::shadow_ray_from(
+                self.p[i],
+                self.ng[i],
+                wi,
+                self.target[i],
+            );
+            (ray, c)
+        });
+        let next = (self.alive & bit != 0).then(|| {
+            let beta = SampledSpectrum([
+                self.beta_out[0][i],
+                self.beta_out[1][i],
+                self.beta_out[2][i],
+                self.beta_out[3][i],
+            ]);
+            (beta, self.pdf[i], self.sp[i])
+        });
+        LambertOutcome { shadow, next }
+    }
+}
+
+/// [`LambertLanes::shade`] as a kernel.
+struct Shade<'a>(&'a mut LambertLanes, &'a mut RayBatch, &'a mut RayBatch);
+
+impl WideKernel for Shade<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<W: Wide>(self, w: W) -> Self::Output {
+        let Shade(x, next, shadows) = self;
+        let zero = w.splat(0.0);
+        let one = w.splat(1.0);
+        let inv_pi = w.splat(INV_PI);
+        let all = w.mask(x.lanes);
+        // `!(a <= 0)`: the scalar code's tests, NaN included.
+
+        let wo_z = w.load(&x.wo_z);
+        let wo_up = positive(w, all, wo_z);
+        let flip = w.mask(x.flip);
+        let n = [w.load(&x.n[0]), w.load(&x.n[1]), w.load(&x.n[2])];
+        let r = [
+            w.load(&x.r[0]),
+            w.load(&x.r[1]),
+            w.load(&x.r[2]),
+            w.load(&x.r[3]),
+        ];
+        let beta = [
+            w.load(&x.beta[0]),
+            w.load(&x.beta[1]),
+            w.load(&x.beta[2]),
+            w.load(&x.beta[3]),
+        ];
+
+        // Parallelogram lights sampled uniformly by area (`AreaLight::sample`): the point
+        // p + v·s + w·t, the direction to it, and the density per solid angle.
+        let rect = w.mask(x.rect);
+        let pos = [w.load(&x.p_x[0]), w.load(&x.p_x[1]), w.load(&x.p_x[2])];
+        let (us, ut) = (w.load(&x.u_light[0]), w.load(&x.u_light[1]));
+        let mut to = [zero; 3];
+        for k in 0..3 {
+            let q = w.add(
+                w.add(w.load(&x.q_p[k]), w.mul(w.load(&x.q_v[k]), us)),
+                w.mul(w.load(&x.q_w[k]), ut),
+            );
+            w.store(q, &mut x.q_at[k]);
+            to[k] = w.sub(q, pos[k]);
+        }
+        let d2 = w.add(
+            w.add(w.mul(to[0], to[0]), w.mul(to[1], to[1])),
+            w.mul(to[2], to[2]),
+        );
+        let inv_d = w.div(one, w.sqrt(d2));
+        let qn = [w.load(&x.q_n[0]), w.load(&x.q_n[1]), w.load(&x.q_n[2])];
+        let mut lw = [zero; 3];
+        let mut lw_finite = all;
+        for k in 0..3 {
+            let d = w.mul(to[k], inv_d);
+            lw_finite = w.and(lw_finite, finite(w, d));
+            lw[k] = w.select(rect, d, w.load(&x.light_wi[k]));
+            w.store(lw[k], &mut x.light_wi[k]);
+        }
+        let cos = w.copysign(dot(w, qn, lw), one);
+        let facing = w.or(
+            w.mask(x.two_sided),
+            w.and_not(
+                all,
+                w.le(dot(w, qn, [w.neg(lw[0]), w.neg(lw[1]), w.neg(lw[2])]), zero),
+            ),
+        );
+        let pdf_rect = w.div(w.mul(w.load(&x.inv_area), d2), cos);
+        let mut li = [zero; 4];
+        let mut li_nonzero = w.mask(0);
+        for k in 0..4 {
+            let v = w.load(&x.li[k]);
+            li[k] = w.select(w.and(rect, w.and_not(all, facing)), zero, v);
+            li_nonzero = w.or(li_nonzero, w.ne(li[k], zero));
+        }
+        let rect_ok = w.and(
+            w.and(rect, w.and(w.gt(d2, zero), w.gt(cos, zero))),
+            w.and(w.and(w.gt(pdf_rect, zero), lw_finite), li_nonzero),
+        );
+        let light = w.or(w.and_not(w.mask(x.light), rect), rect_ok);
+        let pdf_light = w.select(
+            rect,
+            w.mul(w.load(&x.pick_pdf), pdf_rect),
+            w.load(&x.pdf_light),
+        );
+
+        // Next-event estimation: f·cos and the BSDF's density for the light's direction (only
+        // its local z matters to Lambert), the power heuristic against the light's density.
+        let iz = w.add(
+            w.add(w.mul(lw[0], n[0]), w.mul(lw[1], n[1])),
+            w.mul(lw[2], n[2]),
+        );
+        let iz = w.select(flip, w.neg(iz), iz);
+        let f_on = w.and(wo_up, positive(w, all, iz));
+        let cos_pi = w.mul(inv_pi, iz);
+        let mut f = [zero; 4];
+        let mut f_nonzero = w.mask(0);
+        for k in 0..4 {
+            f[k] = w.select(f_on, w.mul(r[k], cos_pi), zero);
+            f_nonzero = w.or(f_nonzero, w.ne(f[k], zero));
+        }
+        let pdf_bsdf = w.select(w.and(wo_up, w.gt(iz, zero)), w.mul(iz, inv_pi), zero);
+        let ratio = w.div(pdf_bsdf, pdf_light);
+        let mis = w.select(
+            w.eq(pdf_light, w.splat(f32::INFINITY)),
+            one,
+            w.select(
+                w.gt(pdf_light, zero),
+                w.div(one, w.add(one, w.mul(ratio, ratio))),
+                zero,
+            ),
+        );
+        let mis = w.select(w.mask(x.delta), one, mis);
+        let scale = w.div(mis, pdf_light);
+        for k in 0..4 {
+            w.store(
+                w.mul(w.mul(w.mul(beta[k], f[k]), li[k]), scale),
+                &mut x.c[k],
+            );
+        }
+        x.shadow = w.bits(w.and(light, f_nonzero));
+
+        // The next direction: Malley's method on Shirley and Chiu's concentric disk, with the
+        // sine and cosine polynomials of `warp`.
+        let two = w.splat(2.0);
+        let ox = w.sub(w.mul(two, w.load(&x.u2[0])), one);
+        let oy = w.sub(w.mul(two, w.load(&x.u2[1])), one);
+        let centre = w.and(w.eq(ox, zero), w.eq(oy, zero));
+        let wide_x = w.gt(w.copysign(ox, one), w.copysign(oy, one));
+        let a = w.select(wide_x, w.div(oy, ox), w.div(ox, oy));
+        let t = w.mul(w.splat(PI / 4.0), a);
+        let z = w.mul(t, t);
+        let sin = w.add(
+            w.mul(
+                w.mul(
+                    w.sub(
+                        w.mul(
+                            w.add(w.mul(w.splat(-1.951_529_6e-4), z), w.splat(8.332_161e-3)),
+                            z,
+                        ),
+                        w.splat(1.666_665_5e-1),
+                    ),
+                    z,
+                ),
+                t,
+            ),
+            t,
+        );
+        let cos = w.add(
+            w.sub(
+                w.mul(
+                    w.mul(
+                        w.add(
+                            w.mul(
+                                w.sub(w.mul(w.splat(2.443_315_7e-5), z), w.splat(1.388_731_6e-3)),
+                                z,
+                            ),
+                            w.splat(4.166_664_6e-2),
+                        ),
+                        z,
+                    ),
+                    z,
+                ),
+                w.mul(w.splat(0.5), z),
+            ),
+            one,
+        );
+        let dx = w.select(wide_x, w.mul(ox, cos), w.mul(oy, sin));
+        let dy = w.select(wide_x, w.mul(ox, sin), w.mul(oy, cos));
+        let dx = w.select(centre, zero, dx);
+        let dy = w.select(centre, zero, dy);
+        let rad = w.sub(w.sub(one, w.mul(dx, dx)), w.mul(dy, dy));
+        let dz = w.sqrt(w.select(w.lt(rad, zero), zero, rad));
+        let pdf = w.select(w.gt(dz, zero), w.mul(dz, inv_pi), zero);
+        let up = w.gt(pdf, zero);
+        w.store(pdf, &mut x.pdf);
+        let lz = w.select(flip, w.neg(dz), dz);
+        let s = [w.load(&x.s[0]), w.load(&x.s[1]), w.load(&x.s[2])];
+        let tt = [w.load(&x.t[0]), w.load(&x.t[1]), w.load(&x.t[2])];
+        let mut ok = w.and(wo_up, up);
+        let mut wi = [zero; 3];
+        for k in 0..3 {
+            wi[k] = w.add(w.add(w.mul(s[k], dx), w.mul(tt[k], dy)), w.mul(n[k], lz));
+            ok = w.and(ok, finite(w, wi[k]));
+        }
+        // The throughput, and Russian roulette: q = min(max(w, β)·Πη², 0.95).
+        let mut b = [zero; 4];
+        let mut b_nonzero = w.mask(0);
+        for k in 0..4 {
+            ok = w.and(ok, finite(w, r[k]));
+            b[k] = w.mul(beta[k], r[k]);
+            b_nonzero = w.or(b_nonzero, w.ne(b[k], zero));
+        }
+        ok = w.and(ok, b_nonzero);
+        let m = max(w, max(w, b[0], b[1]), max(w, b[2], b[3]));
+        let q = w.mul(m, w.load(&x.eta_scale));
+        let q = w.select(w.lt(w.splat(0.95), q), w.splat(0.95), q);
+        let roulette = w.mask(x.roulette);
+        let survive = w.lt(w.load(&x.u_rr), q);
+        ok = w.and(ok, w.or(w.and_not(all, roulette), survive));
+        for k in 0..4 {
+            w.store(w.select(roulette, w.div(b[k], q), b[k]), &mut x.beta_out[k]);
+        }
+        x.alive = w.bits(ok);
+
+        // The rays, their origins moved off the surface as `Ray::spawn_unit` and
+        // `Ray::spawn_between_unit` move them.
+        let ng = [w.load(&x.ng_x[0]), w.load(&x.ng_x[1]), w.load(&x.ng_x[2])];
+        let o = offset(w, pos, ng, wi);
+        for k in 0..3 {
+            put(w, ok, o[k], &mut next.o[k]);
+            put(w, ok, wi[k], &mut next.d[k]);
+        }
+        put(w, ok, zero, &mut next.tmin);
+        put(w, ok, w.splat(f32::INFINITY), &mut next.tmax);
+
+        let rays = w.and(rect, w.and(light, f_nonzero));
+        if w.bits(rays) != 0 {
+            let q = [w.load(&x.q_at[0]), w.load(&x.q_at[1]), w.load(&x.q_at[2])];
+            let o = offset(
+                w,
+                pos,
+                ng,
+                [
+                    w.sub(q[0], pos[0]),
+                    w.sub(q[1], pos[1]),
+                    w.sub(q[2], pos[2]),
+                ],
+            );
+            let t = offset(
+                w,
+                q,
+                qn,
+                [w.sub(o[0], q[0]), w.sub(o[1], q[1]), w.sub(o[2], q[2])],
+            );
+            for k in 0..3 {
+                put(w, rays, o[k], &mut shadows.o[k]);
+                put(w, rays, w.sub(t[k], o[k]), &mut shadows.d[k]);
+            }
+            put(w, rays, zero, &mut shadows.tmin);
+            put(w, rays, w.splat(1.0 - SHADOW_EPSILON), &mut shadows.tmax);
+            shadows.active |= w.bits(rays);
+        }
+    }
+}
+
+/// `!(a <= 0)` in the lanes of `all`: the scalar code's tests, NaN included.
+#[inline(always)]
+fn positive<W: Wide>(w: W, all: W::M, a: W::V) -> W::M {
+    w.and_not(all, w.le(a, w.splat(0.0)))
+}
+
+/// Neither NaN nor infinite.
+#[inline(always)]
+fn finite<W: Wide>(w: W, a: W::V) -> W::M {
+    w.eq(w.sub(a, a), w.splat(0.0))
+}
+
+/// `a·b` as `Vec3::dot` sums it.
+#[inline(always)]
+fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
+    w.add(
+        w.add(w.mul(a[0], b[0]), w.mul(a[1], b[1])),
+        w.mul(a[2], b[2]),
+    )
+}
+
+/// `f32::max` for operands that are not NaN.
+#[inline(always)]
+fn max<W: Wide>(w: W, a: W::V, b: W::V) -> W::V {
+    w.select(w.lt(a, b), b, a)
+}
+
+/// `v` into the lanes `m` of `a`.
+#[inline(always)]
+fn put<W: Wide>(w: W, m: W::M, v: W::V, a: &mut L) {
+    w.store(w.select(m, v, w.load(a)), a);
+}
+
+/// The origin `p` (unit geometric normal `n`) moved off its surface towards the side `d`
+/// points to, as `Ray::spawn_unit` moves it.
+#[inline(always)]
+fn offset<W: Wide>(w: W, p: [W::V; 3], n: [W::V; 3], d: [W::V; 3]) -> [W::V; 3] {
+    let away = w.lt(dot(w, n, d), w.splat(0.0));
+    let mut o = p;
+    for k in 0..3 {
+        let n = w.select(away, w.neg(n[k]), n[k]);
+        let moved = w.move_ulps(p[k], w.mul(w.splat(256.0), n));
+        let near = w.add(p[k], w.mul(w.splat(1.0 / 65536.0), n));
+        let small = w.lt(w.copysign(p[k], w.splat(1.0)), w.splat(1.0 / 32.0));
+        o[k] = w.select(small, near, moved);
+    }
+    o
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Pcg32;
+
+    /// Lanes of every kind, from random numbers: directions on both sides, lights facing both
+    /// ways, delta lights, zero reflectances, roulette on some lanes.
+    fn random_lanes(rng: &mut Pcg32) -> (LambertLanes, Vec<Parallelogram>) {
+        fn v(rng: &mut Pcg32) -> Vec3 {
+            Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            )
+        }
+        fn s(rng: &mut Pcg32, k: f32) -> SampledSpectrum {
+            SampledSpectrum([0; 4].map(|_| rng.next_f32() * k))
+        }
+        let quads: Vec<Parallelogram> = (0..BATCH)
+            .map(|_| {
+                let p = Point3::ORIGIN + v(rng) * 4.0;
+                Parallelogram::new(p, v(rng), v(rng)).expect("quad")
+            })
+            .collect();
+        let mut lanes = LambertLanes::new();
+        for (i, q) in quads.iter().enumerate() {
+            let n = v(rng).normalize();
+            let frame = Frame::from_normal(n.to_normal());
+            let wo = v(rng);
+            let flip = rng.next_f32() < 0.3;
+            let mut r = s(rng, 1.0);
+            if i % 5 == 0 {
+                r = SampledSpectrum::ZERO;
+            }
+            let light = match i % 4 {
+                0 => LaneLight::None,
+                1 => LaneLight::Sample(
+                    v(rng).normalize(),
+                    s(rng, 1.0),
+                    rng.next_f32() * 3.0,
+                    rng.next_f32() < 0.5,
+                    Target::Point(Point3::ORIGIN + v(rng) * 3.0),
+                ),
+                _ => LaneLight::Rect {
+                    q,
+                    inv_area: 1.0 / q.area(),
+                    li: s(rng, 9.0),
+                    two_sided: i % 3 == 0,
+                    u: [rng.next_f32(), rng.next_f32()],
+                    pick_pdf: rng.next_f32(),
+                },
+            };
+            let p = Point3::ORIGIN + v(rng) * if i % 7 == 0 { 0.01 } else { 5.0 };
+            let vertex = LambertVertex {
+                p,
+                ng: v(rng).normalize().to_normal(),
+                frame,
+                wo_z: wo.dot(n),
+                flip,
+                sp: ShadingPoint::at(p),
+                r,
+                beta: s(rng, 1.0),
+                light,
+                u2: [rng.next_f32(), rng.next_f32()],
+                u_rr: (i % 3 != 1).then(|| rng.next_f32()),
+                eta_scale: 1.0 + rng.next_f32(),
+            };
+            lanes.set(i, &vertex);
+        }
+        lanes.lanes = 0xbfff;
+        (lanes, quads)
+    }
+
+    #[test]
+    fn every_instruction_set_shades_the_same_bits() {
+        let levels = [SimdLevel::Sse, SimdLevel::Avx2, SimdLevel::Avx512];
+        let supported = SimdLevel::supported();
+        let mut rng = Pcg32::new(4, 7);
+        let mut seen = [0u32; 3];
+        for _ in 0..50 {
+            let mut results = Vec::new();
+            for &level in levels.iter().filter(|&&l| l <= supported) {
+                let (mut lanes, _quads) = random_lanes(&mut rng.clone());
+                let (mut next, mut shadows) = (RayBatch::default(), RayBatch::default());
+                let mut pending = [SampledSpectrum::ZERO; BATCH];
+                lanes.shade_at(level, &mut next, &mut shadows, &mut pending);
+                let bits =
+                    |a: &[L]| -> Vec<u32> { a.iter().flat_map(|l| l.map(f32::to_bits)).collect() };
+                results.push((
+                    (lanes.shadow, lanes.alive, shadows.active),
+                    bits(&lanes.c),
+                    bits(&lanes.beta_out),
+                    bits(&[lanes.pdf]),
+                    bits(&next.o),
+                    bits(&next.d),
+                    bits(&shadows.o),
+                    bits(&shadows.d),
+                ));
+            }
+            assert!(results.windows(2).all(|w| w[0] == w[1]));
+            assert_eq!(
+                results.len(),
+                levels.iter().filter(|&&l| l <= supported).count()
+            );
+            let ((shadow, alive, rays), ..) = results[0];
+            assert!(shadow & !0xbfff == 0 && alive & !0xbfff == 0 && rays & !0xbfff == 0);
+            seen[0] += shadow.count_ones();
+            seen[1] += alive.count_ones();
+            seen[2] += rays.count_ones();
+            let _ = rng.next_u32();
+        }
+        // Every kind of outcome was compared.
+        assert!(seen.iter().all(|&k| k > 20), "{seen:?}");
+    }
+}
