@@ -16,11 +16,14 @@
 //! throughput never meets).
 
 use crate::light::{ShadingPoint, Target};
-use crate::math::{Frame, Normal3, Point3, Ray, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON};
+use crate::math::{
+    Frame, Normal3, Point2, Point3, Ray, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON,
+};
 use crate::shape::Parallelogram;
 use crate::simd::SimdLevel;
 use crate::simd::{Wide, WideKernel};
-use crate::spectrum::SampledSpectrum;
+use crate::spectrum::{RgbRole, SampledSpectrum, Wavelengths};
+use crate::texture::Texture;
 
 /// Sixteen f32 lanes.
 type L = [f32; BATCH];
@@ -96,8 +99,10 @@ pub(super) struct LambertVertex<'a> {
     pub flip: bool,
     /// The shading point (it becomes the path's previous vertex).
     pub sp: ShadingPoint,
-    /// Reflectance and throughput.
-    pub r: SampledSpectrum,
+    /// The reflectance, at `uv`, in the lanes of `lambda`; the throughput.
+    pub reflectance: &'a Texture,
+    pub uv: Point2,
+    pub lambda: &'a Wavelengths,
     pub beta: SampledSpectrum,
     /// The light sample, or the light to sample here.
     pub light: LaneLight<'a>,
@@ -114,15 +119,15 @@ pub(super) enum LaneLight<'a> {
     /// A light sample made by [`crate::light::Light::sample_from`]: direction, radiance, density
     /// (the pick's probability included), whether the light is a delta light, shadow target.
     Sample(Vec3, SampledSpectrum, f32, bool, Target),
-    /// A parallelogram light of uniform radiance `li`, to sample here with the numbers `u`
-    /// (the pick's probability `pick_pdf`).
+    /// A parallelogram light of uniform radiance, to sample here with the numbers `u` (the
+    /// pick's probability `pick_pdf`).
     Rect {
         /// The light's shape.
         q: &'a Parallelogram,
         /// 1 / its area.
         inv_area: f32,
-        /// Its radiance in the path's lanes.
-        li: SampledSpectrum,
+        /// Its radiance (a texture that is the same everywhere).
+        radiance: &'a Texture,
         /// Emits on both sides.
         two_sided: bool,
         /// The light's pair of numbers.
@@ -208,8 +213,15 @@ impl LambertLanes {
         self.ng_x[2][i] = v.ng.z;
         self.wo_z[i] = v.wo_z;
         self.flip = (self.flip & !bit) | if v.flip { bit } else { 0 };
+        put_texture(
+            &mut self.r,
+            i,
+            v.reflectance,
+            v.uv,
+            v.lambda,
+            RgbRole::Reflectance,
+        );
         for k in 0..4 {
-            self.r[k][i] = v.r.0[k];
             self.beta[k][i] = v.beta.0[k];
         }
         self.light &= !bit;
@@ -238,7 +250,7 @@ impl LambertLanes {
             LaneLight::Rect {
                 q,
                 inv_area,
-                li,
+                radiance,
                 two_sided,
                 u,
                 pick_pdf,
@@ -253,9 +265,8 @@ impl LambertLanes {
                 let n = q.normal();
                 set3(&mut self.q_n, n.x, n.y, n.z);
                 self.inv_area[i] = inv_area;
-                for k in 0..4 {
-                    self.li[k][i] = li.0[k];
-                }
+                let uv = Point2::new(0.0, 0.0);
+                put_texture(&mut self.li, i, radiance, uv, v.lambda, RgbRole::Emission);
                 self.u_light[0][i] = u[0];
                 self.u_light[1][i] = u[1];
                 self.pick_pdf[i] = pick_pdf;
@@ -347,6 +358,24 @@ impl LambertLanes {
             (beta, self.pdf[i], self.sp[i])
         });
         LambertOutcome { shadow, next }
+    }
+}
+
+/// Lane `i` of `a`: the texture `t` at `uv` in the lanes of `w` (`Texture::spectral`), a
+/// uniform colour in RGB mode stored channel by channel (not merged with the other cases into
+/// one value first: its pieces could not be forwarded to a whole-vector load).
+#[inline(always)]
+fn put_texture(a: &mut [L; 4], i: usize, t: &Texture, uv: Point2, w: &Wavelengths, role: RgbRole) {
+    if let (Texture::Uniform(c), Wavelengths::Rgb) = (t, w) {
+        a[0][i] = c.r;
+        a[1][i] = c.g;
+        a[2][i] = c.b;
+        a[3][i] = c.g;
+    } else {
+        let s = t.spectral(uv, w, role);
+        for k in 0..4 {
+            a[k][i] = s.0[k];
+        }
     }
 }
 

@@ -14,13 +14,11 @@ use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
-use crate::material::BsdfModel;
-use crate::math::Point2;
+use crate::material::Model;
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
-use crate::spectrum::RgbRole;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 use lambert_lanes::{LambertLanes, LambertVertex, LaneLight};
@@ -159,9 +157,46 @@ impl Path {
             return done;
         }
 
-        let bsdf = scene
-            .material(&si)
-            .bsdf(si.shading_frame(), si.uv, &mut st.lambda);
+        let material = scene.material(&si);
+        if let (Some((lanes, lane)), Model::Diffuse { reflectance }) = (defer, &material.model) {
+            // A Lambert vertex, left to the batch's Lambert lanes once its numbers are drawn
+            // (in the order the scalar vertex below draws them, the roulette's even where the
+            // path could end before it: it then goes unused). What `Material::bsdf`,
+            // `Bsdf::local_wo` and the shading point below give, without building the BSDF.
+            let frame = si.shading_frame();
+            let cos_o = si.wo.dot(frame.n);
+            let flip = material.two_sided && cos_o < 0.0;
+            let sp = ShadingPoint {
+                p: si.p,
+                n: if cos_o < 0.0 { -frame.n } else { frame.n },
+                reflect_only: true,
+            };
+            let light = self.lane_light(scene, st, &sp, sampler);
+            let _u1 = sampler.next_1d();
+            let u2 = sampler.next_2d();
+            let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
+            lanes.set(
+                lane,
+                &LambertVertex {
+                    p: si.p,
+                    ng: si.n,
+                    frame,
+                    wo_z: if flip { -cos_o } else { cos_o },
+                    flip,
+                    sp,
+                    reflectance,
+                    uv: si.uv,
+                    lambda: &st.lambda,
+                    beta: st.beta,
+                    light,
+                    u2,
+                    u_rr,
+                    eta_scale: st.eta_scale,
+                },
+            );
+            return None;
+        }
+        let bsdf = material.bsdf(si.shading_frame(), si.uv, &mut st.lambda);
         // The outgoing direction in the shading frame, shared by every BSDF query below.
         let (wo, flip) = bsdf.local_wo(si.wo);
 
@@ -173,33 +208,6 @@ impl Path {
             n: if ns.dot(si.wo) < 0.0 { -ns } else { ns },
             reflect_only: bsdf.reflects_only(),
         };
-
-        if let (Some((lanes, lane)), BsdfModel::Lambert(r)) = (defer, &bsdf.model) {
-            // The numbers in the order the scalar vertex below draws them (the roulette's
-            // even where the path could end before it: it then goes unused).
-            let light = self.lane_light(scene, st, &sp, sampler);
-            let _u1 = sampler.next_1d();
-            let u2 = sampler.next_2d();
-            let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
-            lanes.set(
-                lane,
-                &LambertVertex {
-                    p: si.p,
-                    ng: si.n,
-                    frame: bsdf.frame,
-                    wo_z: wo.z,
-                    flip,
-                    sp,
-                    r: *r,
-                    beta: st.beta,
-                    light,
-                    u2,
-                    u_rr,
-                    eta_scale: st.eta_scale,
-                },
-            );
-            return None;
-        }
 
         // Next-event estimation (see `Path::sample_light`).
         let mut shadow = None;
@@ -292,11 +300,7 @@ impl Path {
                     return LaneLight::Rect {
                         q,
                         inv_area: 1.0 / a.area,
-                        li: e.radiance.spectral(
-                            Point2::new(0.0, 0.0),
-                            &st.lambda,
-                            RgbRole::Emission,
-                        ),
+                        radiance: &e.radiance,
                         two_sided: e.two_sided,
                         u,
                         pick_pdf,
@@ -392,12 +396,12 @@ impl Integrator for Path {
         let mut hits = [None; BATCH];
         let mut pending = [SampledSpectrum::ZERO; BATCH];
         // Only the active lanes are read: the batches are filled, not cleared, at each step.
-        // `batch` holds each path's next ray from one step to the next; where the Lambert
-        // lanes put it there, the path's own copy is out of date (`stale`) until it is read.
+        // `batch` holds each path's next ray from one step to the next (the Lambert lanes put
+        // theirs there; the path's own copy is read back at once, so that the stores have
+        // long retired when the next vertex loads it).
         let mut batch = RayBatch::default();
         let mut shadows = RayBatch::default();
         let mut lambert = LambertLanes::new();
-        let mut stale = 0u32;
         loop {
             if alive == 0 {
                 if next == n {
@@ -412,7 +416,6 @@ impl Integrator for Path {
                 }
                 next += m;
                 alive = (1u32 << m) - 1;
-                stale = 0;
             }
             batch.active = alive;
             scene.intersect_batch(&batch, &mut hits, stats);
@@ -422,9 +425,6 @@ impl Integrator for Path {
             lambert.lanes = 0;
             for i in lanes(alive) {
                 let s = slot[i];
-                if stale >> i & 1 != 0 {
-                    st[i].ray = batch.ray(i);
-                }
                 sampler.resume(cursors[s]);
                 let o = self.vertex(scene, &mut st[i], hits[i], sampler, Some((&mut lambert, i)));
                 cursors[s] = sampler.cursor();
@@ -439,7 +439,6 @@ impl Integrator for Path {
                     ended |= 1 << i;
                 }
             }
-            stale = 0;
             if lambert.lanes != 0 {
                 lambert.shade(&mut batch, &mut shadows, &mut pending);
                 for i in lanes(lambert.lanes) {
@@ -456,7 +455,7 @@ impl Integrator for Path {
                             st.prev_delta = false;
                             st.prev = sp;
                             st.depth += 1;
-                            stale |= 1 << i;
+                            st.ray = batch.ray(i);
                         }
                         None => ended |= 1 << i,
                     }
@@ -475,7 +474,6 @@ impl Integrator for Path {
                 if refill && next < n {
                     st[i] = PathState::new(&rays[next], lambdas[next]);
                     batch.set(i, &rays[next]);
-                    stale &= !(1 << i);
                     slot[i] = next;
                     next += 1;
                     alive |= 1 << i;
