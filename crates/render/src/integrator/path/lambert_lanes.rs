@@ -693,6 +693,20 @@ mod tests {
         fn s(rng: &mut Pcg32, k: f32) -> SampledSpectrum {
             SampledSpectrum([0; 4].map(|_| rng.next_f32() * k))
         }
+        fn tex(rng: &mut Pcg32, k: f32) -> Texture {
+            let mut c = || rng.next_f32() * k;
+            Texture::Uniform(crate::color::Rgb::new(c(), c(), c()))
+        }
+        let textures: Vec<(Texture, Texture)> = (0..BATCH)
+            .map(|i| {
+                let r = if i % 5 == 0 {
+                    Texture::Uniform(crate::color::Rgb::BLACK)
+                } else {
+                    tex(rng, 1.0)
+                };
+                (r, tex(rng, 9.0))
+            })
+            .collect();
         let quads: Vec<Parallelogram> = (0..BATCH)
             .map(|_| {
                 let p = Point3::ORIGIN + v(rng) * 4.0;
@@ -705,10 +719,6 @@ mod tests {
             let frame = Frame::from_normal(n.to_normal());
             let wo = v(rng);
             let flip = rng.next_f32() < 0.3;
-            let mut r = s(rng, 1.0);
-            if i % 5 == 0 {
-                r = SampledSpectrum::ZERO;
-            }
             let light = match i % 4 {
                 0 => LaneLight::None,
                 1 => LaneLight::Sample(
@@ -721,7 +731,7 @@ mod tests {
                 _ => LaneLight::Rect {
                     q,
                     inv_area: 1.0 / q.area(),
-                    li: s(rng, 9.0),
+                    radiance: &textures[i].1,
                     two_sided: i % 3 == 0,
                     u: [rng.next_f32(), rng.next_f32()],
                     pick_pdf: rng.next_f32(),
@@ -735,7 +745,9 @@ mod tests {
                 wo_z: wo.dot(n),
                 flip,
                 sp: ShadingPoint::at(p),
-                r,
+                reflectance: &textures[i].0,
+                uv: crate::math::Point2::new(0.0, 0.0),
+                lambda: &Wavelengths::Rgb,
                 beta: s(rng, 1.0),
                 light,
                 u2: [rng.next_f32(), rng.next_f32()],
