@@ -15,7 +15,7 @@
 //! and square root, no fused multiply-add; the NaN cases of `max`/`min` aside, which a finite
 //! throughput never meets).
 
-use crate::light::{ShadingPoint, Target};
+use crate::light::Target;
 use crate::math::{
     Frame, Normal3, Point2, Point3, Ray, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON,
 };
@@ -76,7 +76,6 @@ pub(super) struct LambertLanes {
     p: [Point3; BATCH],
     ng: [Normal3; BATCH],
     target: [Target; BATCH],
-    sp: [ShadingPoint; BATCH],
     // Outputs.
     /// Lanes whose light sample adds `c` when unoccluded.
     shadow: u32,
@@ -97,8 +96,6 @@ pub(super) struct LambertVertex<'a> {
     pub frame: Frame,
     pub wo_z: f32,
     pub flip: bool,
-    /// The shading point (it becomes the path's previous vertex).
-    pub sp: ShadingPoint,
     /// The reflectance, at `uv`, in the lanes of `lambda`; the throughput.
     pub reflectance: &'a Texture,
     pub uv: Point2,
@@ -138,11 +135,10 @@ pub(super) enum LaneLight<'a> {
 }
 
 /// What [`LambertLanes::finish`] gives for a lane: a shadow ray left to it with what it adds,
-/// and the path's next throughput, direction density and previous vertex (`None`: the path
-/// ends here).
+/// and the path's next throughput and direction density (`None`: the path ends here).
 pub(super) struct LambertOutcome {
     pub shadow: Option<(Ray, SampledSpectrum)>,
-    pub next: Option<(SampledSpectrum, f32, ShadingPoint)>,
+    pub next: Option<(SampledSpectrum, f32)>,
 }
 
 impl LambertLanes {
@@ -182,7 +178,6 @@ impl LambertLanes {
             p: [o; BATCH],
             ng: [Normal3::new(0.0, 0.0, 1.0); BATCH],
             target: [Target::Infinite; BATCH],
-            sp: [ShadingPoint::at(o); BATCH],
             shadow: 0,
             c: [Z; 4],
             alive: 0,
@@ -282,7 +277,6 @@ impl LambertLanes {
         self.eta_scale[i] = v.eta_scale;
         self.p[i] = v.p;
         self.ng[i] = v.ng;
-        self.sp[i] = v.sp;
     }
 
     /// Shades every lane in use (sixteen lanes at once, at the widest instruction set the CPU
@@ -328,8 +322,8 @@ impl LambertLanes {
     }
 
     /// What is left of lane `i` once [`LambertLanes::shade`] has run: the shadow ray of a light
-    /// sampled by [`crate::light::Light::sample_from`], and the path's next throughput,
-    /// direction density and previous vertex (its ray is in the batch already).
+    /// sampled by [`crate::light::Light::sample_from`], and the path's next throughput and
+    /// direction density (its ray is in the batch already).
     #[inline(always)]
     pub(super) fn finish(&self, i: usize) -> LambertOutcome {
         let bit = 1u32 << i;
@@ -355,7 +349,7 @@ impl LambertLanes {
                 self.beta_out[2][i],
                 self.beta_out[3][i],
             ]);
-            (beta, self.pdf[i], self.sp[i])
+            (beta, self.pdf[i])
         });
         LambertOutcome { shadow, next }
     }
@@ -744,7 +738,6 @@ mod tests {
                 frame,
                 wo_z: wo.dot(n),
                 flip,
-                sp: ShadingPoint::at(p),
                 reflectance: &textures[i].0,
                 uv: crate::math::Point2::new(0.0, 0.0),
                 lambda: &Wavelengths::Rgb,

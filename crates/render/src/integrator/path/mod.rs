@@ -175,6 +175,10 @@ impl Path {
             let _u1 = sampler.next_1d();
             let u2 = sampler.next_2d();
             let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
+            // What the path keeps of this vertex if it goes on (unread if it ends here).
+            st.prev = sp;
+            st.prev_delta = false;
+            st.depth += 1;
             lanes.set(
                 lane,
                 &LambertVertex {
@@ -183,7 +187,6 @@ impl Path {
                     frame,
                     wo_z: if flip { -cos_o } else { cos_o },
                     flip,
-                    sp,
                     reflectance,
                     uv: si.uv,
                     lambda: &st.lambda,
@@ -449,12 +452,9 @@ impl Integrator for Path {
                     }
                     let st = &mut st[i];
                     match o.next {
-                        Some((beta, pdf, sp)) => {
+                        Some((beta, pdf)) => {
                             st.beta = beta;
                             st.prev_pdf = pdf;
-                            st.prev_delta = false;
-                            st.prev = sp;
-                            st.depth += 1;
                             st.ray = batch.ray(i);
                         }
                         None => ended |= 1 << i,
