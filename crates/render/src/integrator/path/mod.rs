@@ -77,6 +77,22 @@ impl PathState {
             depth: 0,
         }
     }
+
+    /// Starts this state over on a new camera ray: [`PathState::new`] in place, field by field
+    /// (built whole and copied, the state goes through the stack in pieces that a later whole
+    /// load cannot be forwarded from). `prev` keeps its value: a path that starts from the
+    /// camera reads it only once a vertex has set it (`prev_delta` is true until then).
+    #[inline(always)]
+    fn start(&mut self, camera_ray: &Ray, lambda: Wavelengths) {
+        self.l = SampledSpectrum::ZERO;
+        self.beta = SampledSpectrum::ONE;
+        self.lambda = lambda;
+        self.ray = *camera_ray;
+        self.prev_pdf = 0.0;
+        self.prev_delta = true;
+        self.eta_scale = 1.0;
+        self.depth = 0;
+    }
 }
 
 /// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
@@ -413,7 +429,7 @@ impl Integrator for Path {
                 // A fresh batch: the next samples, in order, from lane 0.
                 let m = (n - next).min(BATCH);
                 for i in 0..m {
-                    st[i] = PathState::new(&rays[next + i], lambdas[next + i]);
+                    st[i].start(&rays[next + i], lambdas[next + i]);
                     batch.set(i, &rays[next + i]);
                     slot[i] = next + i;
                 }
@@ -472,7 +488,7 @@ impl Integrator for Path {
                 out[slot[i]] = st[i].l;
                 lambdas[slot[i]] = st[i].lambda;
                 if refill && next < n {
-                    st[i] = PathState::new(&rays[next], lambdas[next]);
+                    st[i].start(&rays[next], lambdas[next]);
                     batch.set(i, &rays[next]);
                     slot[i] = next;
                     next += 1;
