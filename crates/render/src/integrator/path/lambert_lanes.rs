@@ -17,7 +17,7 @@
 
 use crate::light::Target;
 use crate::math::{
-    Frame, Normal3, Point2, Point3, Ray, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON,
+    Frame, Normal3, Point2, Point3, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON,
 };
 use crate::shape::Parallelogram;
 use crate::simd::SimdLevel;
@@ -72,10 +72,10 @@ pub(super) struct LambertLanes {
     u_rr: L,
     roulette: u32,
     eta_scale: L,
-    // Per-lane data the rays are made from.
-    p: [Point3; BATCH],
-    ng: [Normal3; BATCH],
-    target: [Target; BATCH],
+    /// Where the shadow rays of light samples made by the lights go: a point on a surface
+    /// (its normal in `q_n`), a point in space (both in `q_at`), or infinitely far.
+    to_surface: u32,
+    to_point: u32,
     // Outputs.
     /// Lanes whose light sample adds `c` when unoccluded.
     shadow: u32,
@@ -134,17 +134,15 @@ pub(super) enum LaneLight<'a> {
     },
 }
 
-/// What [`LambertLanes::finish`] gives for a lane: a shadow ray left to it with what it adds,
-/// and the path's next throughput and direction density (`None`: the path ends here).
+/// What [`LambertLanes::finish`] gives for a lane: the path's next throughput and direction
+/// density (`None`: the path ends here).
 pub(super) struct LambertOutcome {
-    pub shadow: Option<(Ray, SampledSpectrum)>,
     pub next: Option<(SampledSpectrum, f32)>,
 }
 
 impl LambertLanes {
     /// No lanes.
     pub(super) fn new() -> Self {
-        let o = Point3::ORIGIN;
         Self {
             lanes: 0,
             p_x: [Z; 3],
@@ -175,9 +173,8 @@ impl LambertLanes {
             u_rr: Z,
             roulette: 0,
             eta_scale: Z,
-            p: [o; BATCH],
-            ng: [Normal3::new(0.0, 0.0, 1.0); BATCH],
-            target: [Target::Infinite; BATCH],
+            to_surface: 0,
+            to_point: 0,
             shadow: 0,
             c: [Z; 4],
             alive: 0,
@@ -223,6 +220,8 @@ impl LambertLanes {
         self.delta &= !bit;
         self.rect &= !bit;
         self.two_sided &= !bit;
+        self.to_surface &= !bit;
+        self.to_point &= !bit;
         let set3 = |a: &mut [L; 3], x: f32, y: f32, z: f32| {
             a[0][i] = x;
             a[1][i] = y;
@@ -240,7 +239,18 @@ impl LambertLanes {
                     self.li[k][i] = li.0[k];
                 }
                 self.pdf_light[i] = pdf;
-                self.target[i] = target;
+                match target {
+                    Target::Surface(q, n) => {
+                        self.to_surface |= bit;
+                        set3(&mut self.q_at, q.x, q.y, q.z);
+                        set3(&mut self.q_n, n.x, n.y, n.z);
+                    }
+                    Target::Point(q) => {
+                        self.to_point |= bit;
+                        set3(&mut self.q_at, q.x, q.y, q.z);
+                    }
+                    Target::Infinite => {}
+                }
             }
             LaneLight::Rect {
                 q,
@@ -275,8 +285,6 @@ impl LambertLanes {
             self.u_rr[i] = u;
         }
         self.eta_scale[i] = v.eta_scale;
-        self.p[i] = v.p;
-        self.ng[i] = v.ng;
     }
 
     /// Shades every lane in use (sixteen lanes at once, at the widest instruction set the CPU
@@ -312,11 +320,13 @@ impl LambertLanes {
             &mut self.rect,
             &mut self.two_sided,
             &mut self.roulette,
+            &mut self.to_surface,
+            &mut self.to_point,
         ] {
             *mask &= m;
         }
         crate::simd::run_wide_at(level, Shade(self, next, shadows));
-        for i in crate::math::lanes(self.shadow & self.rect) {
+        for i in crate::math::lanes(self.shadow) {
             pending[i] = SampledSpectrum([self.c[0][i], self.c[1][i], self.c[2][i], self.c[3][i]]);
         }
     }
@@ -327,21 +337,6 @@ impl LambertLanes {
     #[inline(always)]
     pub(super) fn finish(&self, i: usize) -> LambertOutcome {
         let bit = 1u32 << i;
-        let shadow = (self.shadow & !self.rect & bit != 0).then(|| {
-            let wi = Vec3::new(
-                self.light_wi[0][i],
-                self.light_wi[1][i],
-                self.light_wi[2][i],
-            );
-            let c = SampledSpectrum([self.c[0][i], self.c[1][i], self.c[2][i], self.c[3][i]]);
-            let ray = crate::integrator::local::shadow_ray_from(
-                self.p[i],
-                self.ng[i],
-                wi,
-                self.target[i],
-            );
-            (ray, c)
-        });
         let next = (self.alive & bit != 0).then(|| {
             let beta = SampledSpectrum([
                 self.beta_out[0][i],
@@ -351,7 +346,7 @@ impl LambertLanes {
             ]);
             (beta, self.pdf[i])
         });
-        LambertOutcome { shadow, next }
+        LambertOutcome { next }
     }
 }
 
@@ -416,7 +411,7 @@ impl WideKernel for Shade<'_> {
                 w.add(w.load(&x.q_p[k]), w.mul(w.load(&x.q_v[k]), us)),
                 w.mul(w.load(&x.q_w[k]), ut),
             );
-            w.store(q, &mut x.q_at[k]);
+            put(w, rect, q, &mut x.q_at[k]);
             to[k] = w.sub(q, pos[k]);
         }
         let d2 = w.add(
@@ -590,31 +585,56 @@ impl WideKernel for Shade<'_> {
         put(w, ok, zero, &mut next.tmin);
         put(w, ok, w.splat(f32::INFINITY), &mut next.tmax);
 
-        let rays = w.and(rect, w.and(light, f_nonzero));
+        // The shadow rays (`shadow_ray_from`): between two surface points, each moved off its
+        // surface; to a point in space, stopping short of it; or along the direction to a
+        // light at infinity.
+        let rays = w.and(light, f_nonzero);
+        let between = w.and(rays, w.or(rect, w.mask(x.to_surface)));
+        let towards = w.and(rays, w.mask(x.to_point));
+        let away = w.and_not(rays, w.or(between, towards));
         if w.bits(rays) != 0 {
             let q = [w.load(&x.q_at[0]), w.load(&x.q_at[1]), w.load(&x.q_at[2])];
-            let o = offset(
-                w,
-                pos,
-                ng,
-                [
-                    w.sub(q[0], pos[0]),
-                    w.sub(q[1], pos[1]),
-                    w.sub(q[2], pos[2]),
-                ],
-            );
-            let t = offset(
-                w,
-                q,
-                qn,
-                [w.sub(o[0], q[0]), w.sub(o[1], q[1]), w.sub(o[2], q[2])],
-            );
+            let qn = [w.load(&x.q_n[0]), w.load(&x.q_n[1]), w.load(&x.q_n[2])];
+            let to_q = [
+                w.sub(q[0], pos[0]),
+                w.sub(q[1], pos[1]),
+                w.sub(q[2], pos[2]),
+            ];
+            // `Ray::spawn_to` normalises the normal again.
+            let len = w.sqrt(dot(w, ng, ng));
+            let inv = w.div(one, len);
+            let unit = w.gt(len, zero);
+            let mut ng_unit = ng;
             for k in 0..3 {
+                ng_unit[k] = w.select(unit, w.mul(ng[k], inv), ng[k]);
+            }
+            let o_between = offset(w, pos, ng, to_q);
+            let o_towards = offset(w, pos, ng_unit, to_q);
+            let o_away = offset(w, pos, ng, lw);
+            let mut o = o_away;
+            let mut back = o_away;
+            for k in 0..3 {
+                o[k] = w.select(
+                    between,
+                    o_between[k],
+                    w.select(towards, o_towards[k], o_away[k]),
+                );
+                back[k] = w.sub(o[k], q[k]);
+            }
+            let t = offset(w, q, qn, back);
+            for k in 0..3 {
+                let d = w.select(
+                    between,
+                    w.sub(t[k], o[k]),
+                    w.select(towards, w.sub(q[k], o[k]), lw[k]),
+                );
                 put(w, rays, o[k], &mut shadows.o[k]);
-                put(w, rays, w.sub(t[k], o[k]), &mut shadows.d[k]);
+                put(w, rays, d, &mut shadows.d[k]);
             }
             put(w, rays, zero, &mut shadows.tmin);
-            put(w, rays, w.splat(1.0 - SHADOW_EPSILON), &mut shadows.tmax);
+            let short = w.splat(1.0 - SHADOW_EPSILON);
+            let tmax = w.select(away, w.splat(f32::INFINITY), short);
+            put(w, rays, tmax, &mut shadows.tmax);
             shadows.active |= w.bits(rays);
         }
     }
@@ -715,12 +735,19 @@ mod tests {
             let flip = rng.next_f32() < 0.3;
             let light = match i % 4 {
                 0 => LaneLight::None,
-                1 => LaneLight::Sample(
+                1 | 3 if i < 8 => LaneLight::Sample(
                     v(rng).normalize(),
                     s(rng, 1.0),
                     rng.next_f32() * 3.0,
                     rng.next_f32() < 0.5,
-                    Target::Point(Point3::ORIGIN + v(rng) * 3.0),
+                    match i % 3 {
+                        0 => Target::Point(Point3::ORIGIN + v(rng) * 3.0),
+                        1 => Target::Surface(
+                            Point3::ORIGIN + v(rng) * 3.0,
+                            v(rng).normalize().to_normal(),
+                        ),
+                        _ => Target::Infinite,
+                    },
                 ),
                 _ => LaneLight::Rect {
                     q,

@@ -462,10 +462,6 @@ impl Integrator for Path {
                 lambert.shade(&mut batch, &mut shadows, &mut pending);
                 for i in lanes(lambert.lanes) {
                     let o = lambert.finish(i);
-                    if let Some((ray, c)) = o.shadow {
-                        shadows.set(i, &ray);
-                        pending[i] = c;
-                    }
                     let st = &mut st[i];
                     match o.next {
                         Some((beta, pdf)) => {
