@@ -331,6 +331,20 @@ impl Sampler {
         None
     }
 
+    /// Passes over the next uniform number without computing it: the sequence goes on as after
+    /// [`Sampler::next_1d`] (for a vertex that draws a number it does not need, so that the
+    /// numbers after it stay where they are), but a tabulated dimension nobody reads is never
+    /// tabulated.
+    #[inline(always)]
+    pub fn skip_1d(&mut self) {
+        match self.mode {
+            Mode::Independent => {
+                self.rng.next_u32();
+            }
+            Mode::Sobol(_) | Mode::Strata(_) => self.dim += 1,
+        }
+    }
+
     /// The next uniform number.
     #[inline(always)]
     pub fn next_1d(&mut self) -> f32 {
@@ -586,6 +600,36 @@ mod tests {
     /// The first 2^k samples of every pair of dimensions form a (0, 2)-net: each of the 2^k
     /// elementary intervals of area 2^-k holds exactly one point (checked for 1 × 2^k strips
     /// and square cells).
+    #[test]
+    fn a_skipped_number_leaves_the_rest_of_the_sequence_in_place() {
+        for kind in [
+            SamplerKind::Sobol,
+            SamplerKind::Stratified,
+            SamplerKind::Independent,
+        ] {
+            for index in [0u32, 5, 63, 64, 100] {
+                let mut drawn = Sampler::for_pixel_with(kind, 3, 17, 128);
+                let mut skipped = drawn.clone();
+                drawn.pixel_sample(index);
+                skipped.pixel_sample(index);
+                // Tabulated and computed dimensions alike (the tables stop at BATCH_DIMS).
+                for k in 0..2 * BATCH_DIMS {
+                    if k % 3 == 1 {
+                        drawn.next_1d();
+                        skipped.skip_1d();
+                    } else {
+                        let (a, b) = (drawn.next_2d(), skipped.next_2d());
+                        assert_eq!(
+                            a.map(f32::to_bits),
+                            b.map(f32::to_bits),
+                            "{kind:?} {index} {k}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn sobol_pairs_are_stratified() {
         for n in [16u32, 64, 256] {

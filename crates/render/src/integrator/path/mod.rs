@@ -188,7 +188,7 @@ impl Path {
                 reflect_only: true,
             };
             let light = self.lane_light(scene, st, &sp, sampler);
-            let _u1 = sampler.next_1d();
+            sampler.skip_1d();
             let u2 = sampler.next_2d();
             let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
             // What the path keeps of this vertex if it goes on (unread if it ends here).
