@@ -182,17 +182,15 @@ impl Path {
             let frame = si.shading_frame();
             let cos_o = si.wo.dot(frame.n);
             let flip = material.two_sided && cos_o < 0.0;
-            let sp = ShadingPoint {
-                p: si.p,
-                n: if cos_o < 0.0 { -frame.n } else { frame.n },
-                reflect_only: true,
-            };
-            let light = self.lane_light(scene, st, &sp, sampler);
+            // The shading point, made where the path keeps it if it goes on (unread if it ends
+            // here; a copy made on the stack would be reloaded whole from pieces).
+            st.prev.p = si.p;
+            st.prev.n = if cos_o < 0.0 { -frame.n } else { frame.n };
+            st.prev.reflect_only = true;
+            let light = self.lane_light(scene, st, &st.prev, sampler);
             sampler.skip_1d();
             let u2 = sampler.next_2d();
             let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
-            // What the path keeps of this vertex if it goes on (unread if it ends here).
-            st.prev = sp;
             st.prev_delta = false;
             st.depth += 1;
             lanes.set(
