@@ -63,6 +63,13 @@ impl Microfacet {
         if w.dot(m) * w.z <= 0.0 {
             return 0.0;
         }
+        self.g1_visible(w)
+    }
+
+    /// [`Microfacet::g1`] for a normal `m` that `w` sees (w·m and w.z of the same sign): a
+    /// function of `w` alone.
+    #[inline]
+    pub(crate) fn g1_visible(&self, w: Vec3) -> f32 {
         let ct = w.z.abs();
         let tan = (1.0 - ct * ct).max(0.0).sqrt() / ct;
         if tan == 0.0 {
@@ -94,14 +101,48 @@ impl Microfacet {
     /// Samples a microfacet normal seen from `wi` (z > 0).
     #[inline]
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Vec3 {
+        self.sampler(wi)
+            .normal(self.radial(u[0]), NormalSampler::angular(u[1]))
+    }
+
+    /// [`Microfacet::sample`]'s part that depends on the direction alone: to sample many
+    /// normals seen from one direction (the same normals, bit for bit).
+    #[inline]
+    pub(crate) fn sampler(&self, wi: Vec3) -> NormalSampler {
         match self.dist {
-            Distribution::Ggx => sample_ggx_vndf(wi, self.alpha, u),
+            Distribution::Ggx => {
+                let alpha = self.alpha;
+                // Stretch the view direction to the hemisphere configuration.
+                let vh = Vec3::new(alpha * wi.x, alpha * wi.y, wi.z).normalize();
+                let lensq = vh.x * vh.x + vh.y * vh.y;
+                let t1 = if lensq > 0.0 {
+                    Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt()
+                } else {
+                    Vec3::X
+                };
+                let t2 = vh.cross(t1);
+                NormalSampler::Ggx {
+                    alpha,
+                    vh,
+                    t1,
+                    t2,
+                    s: 0.5 * (1.0 + vh.z),
+                }
+            }
+            Distribution::Beckmann => NormalSampler::Beckmann,
+        }
+    }
+
+    /// [`Microfacet::sample`]'s part that depends on the first number alone: the radius
+    /// √u₀ on the projected disk (GGX), or (cos θm, sin θm) (Beckmann).
+    #[inline]
+    pub(crate) fn radial(&self, u0: f32) -> (f32, f32) {
+        match self.dist {
+            Distribution::Ggx => (u0.sqrt(), 0.0),
             Distribution::Beckmann => {
-                let tan2 = -self.alpha * self.alpha * (1.0 - u[0]).ln();
+                let tan2 = -self.alpha * self.alpha * (1.0 - u0).ln();
                 let ct = 1.0 / (1.0 + tan2).sqrt();
-                let st = (1.0 - ct * ct).max(0.0).sqrt();
-                let phi = 2.0 * PI * u[1];
-                Vec3::new(st * phi.cos(), st * phi.sin(), ct)
+                (ct, (1.0 - ct * ct).max(0.0).sqrt())
             }
         }
     }
@@ -136,27 +177,62 @@ impl Microfacet {
     }
 }
 
-/// Heitz 2018, "Sampling the GGX Distribution of Visible Normals".
-fn sample_ggx_vndf(wi: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
-    // Stretch the view direction to the hemisphere configuration.
-    let vh = Vec3::new(alpha * wi.x, alpha * wi.y, wi.z).normalize();
-    let lensq = vh.x * vh.x + vh.y * vh.y;
-    let t1 = if lensq > 0.0 {
-        Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt()
-    } else {
-        Vec3::X
-    };
-    let t2 = vh.cross(t1);
-    // Sample the projected area.
-    let r = u[0].sqrt();
-    let phi = 2.0 * PI * u[1];
-    let p1 = r * phi.cos();
-    let mut p2 = r * phi.sin();
-    let s = 0.5 * (1.0 + vh.z);
-    p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
-    let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-    // Unstretch.
-    Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(1e-6)).normalize()
+/// [`Microfacet::sample`] split by what its parts depend on ([`Microfacet::sampler`]): the
+/// direction's frame for GGX (Heitz 2018, "Sampling the GGX Distribution of Visible Normals");
+/// nothing for Beckmann, whose normals do not depend on the direction.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum NormalSampler {
+    /// GGX's visible normals seen from a direction.
+    Ggx {
+        /// Roughness.
+        alpha: f32,
+        /// The stretched direction.
+        vh: Vec3,
+        /// A frame around it.
+        t1: Vec3,
+        /// The frame's third axis.
+        t2: Vec3,
+        /// The share of the projected disk's half that the direction sees.
+        s: f32,
+    },
+    /// Beckmann: D(m)·cos θm.
+    Beckmann,
+}
+
+impl NormalSampler {
+    /// The part of a sample that depends on the second number alone: (cos φ, sin φ).
+    #[inline]
+    pub(crate) fn angular(u1: f32) -> (f32, f32) {
+        let phi = 2.0 * PI * u1;
+        (phi.cos(), phi.sin())
+    }
+
+    /// The normal given [`Microfacet::radial`] and [`NormalSampler::angular`].
+    #[inline]
+    pub(crate) fn normal(&self, radial: (f32, f32), (cos_phi, sin_phi): (f32, f32)) -> Vec3 {
+        match *self {
+            NormalSampler::Ggx {
+                alpha,
+                vh,
+                t1,
+                t2,
+                s,
+            } => {
+                // Sample the projected area.
+                let r = radial.0;
+                let p1 = r * cos_phi;
+                let mut p2 = r * sin_phi;
+                p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
+                let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
+                // Unstretch.
+                Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(1e-6)).normalize()
+            }
+            NormalSampler::Beckmann => {
+                let (ct, st) = radial;
+                Vec3::new(st * cos_phi, st * sin_phi, ct)
+            }
+        }
+    }
 }
 
 #[cfg(test)]
