@@ -3,17 +3,50 @@
 use super::{Normal3, Vec3};
 
 /// An orthonormal basis `(s, t, n)`: `n` is the local +z axis.
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// Each axis starts a 16-byte row of its own (a zero fills the rest): a frame is written
+/// and copied as three whole rows, so that reading an axis back (in any pieces) is served
+/// by the one store that wrote its row. Rows packed at 12-byte strides were written in
+/// 16-byte pieces that cut axes in two, and the readers' loads across those cuts could not
+/// be forwarded from the stores (a stall of some ten cycles each).
+#[repr(C, align(16))]
+#[derive(Clone, Copy, PartialEq)]
 pub struct Frame {
     /// Local x axis.
     pub s: Vec3,
+    pad_s: f32,
     /// Local y axis.
     pub t: Vec3,
+    pad_t: f32,
     /// Local z axis (the normal).
     pub n: Vec3,
+    pad_n: f32,
+}
+
+impl std::fmt::Debug for Frame {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Frame")
+            .field("s", &self.s)
+            .field("t", &self.t)
+            .field("n", &self.n)
+            .finish()
+    }
 }
 
 impl Frame {
+    /// The frame with axes `s`, `t` and `n` (taken as they are: orthonormal, right-handed).
+    #[inline(always)]
+    pub const fn new(s: Vec3, t: Vec3, n: Vec3) -> Self {
+        Self {
+            s,
+            pad_s: 0.0,
+            t,
+            pad_t: 0.0,
+            n,
+            pad_n: 0.0,
+        }
+    }
+
     /// The basis around a unit normal, without branches on the normal's direction (Duff et al.,
     /// "Building an Orthonormal Basis, Revisited", JCGT 2017).
     #[inline]
@@ -24,7 +57,7 @@ impl Frame {
         let b = n.x * n.y * a;
         let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
         let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
-        Self { s, t, n }
+        Self::new(s, t, n)
     }
 
     /// The basis with normal `n` whose first axis is `dpdu` made orthogonal to `n`
@@ -37,11 +70,7 @@ impl Frame {
             return Self::from_normal(n);
         }
         let s = s / len;
-        Self {
-            s,
-            t: nv.cross(s),
-            n: nv,
-        }
+        Self::new(s, nv.cross(s), nv)
     }
 
     /// World → local coordinates.
@@ -84,6 +113,19 @@ mod tests {
             let v = Vec3::new(0.1, 0.2, 0.3);
             assert!(f.to_world(f.to_local(v)).approx_eq(v, 1e-6));
         }
+    }
+
+    #[test]
+    fn axes_start_rows_of_sixteen_bytes() {
+        assert_eq!(std::mem::size_of::<Frame>(), 48);
+        assert_eq!(std::mem::align_of::<Frame>(), 16);
+        assert_eq!(std::mem::offset_of!(Frame, s), 0);
+        assert_eq!(std::mem::offset_of!(Frame, t), 16);
+        assert_eq!(std::mem::offset_of!(Frame, n), 32);
+        let f = Frame::new(Vec3::X, Vec3::Y, Vec3::Z);
+        assert_eq!((f.s, f.t, f.n), (Vec3::X, Vec3::Y, Vec3::Z));
+        assert_eq!(f, Frame::from_normal(Vec3::Z.to_normal()));
+        assert_eq!(format!("{f:?}").matches("pad").count(), 0);
     }
 
     #[test]
