@@ -180,6 +180,29 @@ impl AreaLight {
         1.0 / (4.0 * PI * scale)
     }
 
+    /// [`AreaLight::sample`] for a parallelogram light (`None` for other shapes; `Some(None)`
+    /// when the sample is unusable).
+    #[inline(always)]
+    pub(super) fn sample_parallelogram(
+        &self,
+        emissions: &[Emission],
+        p: Point3,
+        u: [f32; 2],
+        lambda: &Wavelengths,
+    ) -> Option<Option<LightSample>> {
+        let AreaShape::Parallelogram(q) = &self.shape else {
+            return None;
+        };
+        let emission = &emissions[self.emission as usize];
+        Some(area_sample(
+            emission,
+            p,
+            q.geometry(u[0], u[1]),
+            self.inv_area,
+            lambda,
+        ))
+    }
+
     /// Samples a point of the light seen from `p`: the direction, emitted radiance towards `p`,
     /// and the density per unit solid angle.
     pub fn sample(
