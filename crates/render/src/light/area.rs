@@ -16,7 +16,9 @@ use crate::shape::{Cube, Disk, LocalGeometry, Mesh, Parallelogram, Sphere};
 use crate::spectrum::Wavelengths;
 
 /// The sampleable shape of an area light.
+// An explicit tag: a match reads one byte, where the niche in a field cost six instructions.
 #[derive(Clone, Debug, PartialEq)]
+#[repr(u8)]
 pub enum AreaShape {
     /// A sphere; `cone` holds its centre and radius when its placement is a similarity.
     Sphere {

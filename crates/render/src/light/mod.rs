@@ -73,7 +73,10 @@ fn emitted(rgb: Rgb, spectrum: &Option<Arc<Spectrum>>, lambda: &Wavelengths) -> 
 }
 
 /// The closed set of lights.
+// An explicit tag: a match reads one byte, where the niche in a field cost seven
+// instructions at every light sample.
 #[derive(Clone, Debug, PartialEq)]
+#[repr(u8)]
 pub enum Light {
     /// A point light.
     Point(PointLight, Components),
