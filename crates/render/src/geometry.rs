@@ -300,7 +300,7 @@ impl Geometry {
             }
             PrimRef::Triangle { mesh, tri } => {
                 let m = &self.meshes[mesh as usize];
-                (m.geometry(tri, hit.uv[0], hit.uv[1]), m.props, None)
+                (m.geometry_inline(tri, hit.uv[0], hit.uv[1]), m.props, None)
             }
         };
         SurfaceInteraction {

@@ -134,8 +134,9 @@ impl Cube {
         })
     }
 
-    /// The surface where the ray crosses `face` at `t`.
-    #[inline]
+    /// The surface where the ray crosses `face` at `t` (inlined: returned from a call, the
+    /// surface went through memory in other pieces than the caller read back).
+    #[inline(always)]
     pub fn geometry(&self, ray: &Ray, t: f32, face: u32) -> LocalGeometry {
         let q = self.local_origin(ray.o) + self.world_from_object.inv_vector(ray.d) * t;
         self.surface(face, q)
