@@ -1,6 +1,7 @@
 //! Orthonormal frames (shading frames) built from a single normal.
 
 use super::{Normal3, Vec3};
+use crate::simd::F4;
 
 /// An orthonormal basis `(s, t, n)`: `n` is the local +z axis.
 ///
@@ -35,15 +36,24 @@ impl std::fmt::Debug for Frame {
 
 impl Frame {
     /// The frame with axes `s`, `t` and `n` (taken as they are: orthonormal, right-handed).
+    /// Each row is made in one vector register (an SSE `max` of the row with itself, which
+    /// keeps every bit), so that a frame computed on the fly and stored is written as three
+    /// whole rows, which whole-row loads are forwarded from (written lane by lane, each
+    /// row's copy into the BSDF stalled).
     #[inline(always)]
-    pub const fn new(s: Vec3, t: Vec3, n: Vec3) -> Self {
+    pub fn new(s: Vec3, t: Vec3, n: Vec3) -> Self {
+        let row = |v: Vec3| {
+            let r = F4::load(&[v.x, v.y, v.z, 0.0]);
+            r.max_keep(r).to_array()
+        };
+        let [s, t, n] = [row(s), row(t), row(n)];
         Self {
-            s,
-            pad_s: 0.0,
-            t,
-            pad_t: 0.0,
-            n,
-            pad_n: 0.0,
+            s: Vec3::new(s[0], s[1], s[2]),
+            pad_s: s[3],
+            t: Vec3::new(t[0], t[1], t[2]),
+            pad_t: t[3],
+            n: Vec3::new(n[0], n[1], n[2]),
+            pad_n: n[3],
         }
     }
 
@@ -126,6 +136,14 @@ mod tests {
         assert_eq!((f.s, f.t, f.n), (Vec3::X, Vec3::Y, Vec3::Z));
         assert_eq!(f, Frame::from_normal(Vec3::Z.to_normal()));
         assert_eq!(format!("{f:?}").matches("pad").count(), 0);
+        let odd = Vec3::new(-0.0, f32::NAN, f32::from_bits(1));
+        let g = Frame::new(odd, odd, odd);
+        for a in [g.s, g.t, g.n] {
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                odd.to_array().map(f32::to_bits)
+            );
+        }
     }
 
     #[test]
