@@ -266,8 +266,35 @@ impl Geometry {
 
     /// [`Geometry::interaction`], with texture coordinates only when `uv`: shapes whose
     /// coordinates cost something to compute (spheres) leave them at zero otherwise.
-    #[inline]
+    #[inline(always)]
     pub fn interaction_with(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfaceInteraction {
+        // A parallelogram (walls, floors, area lights) is resolved in the caller: the
+        // interaction is not returned through memory from a call (written by the callee in
+        // other pieces than the caller reads back), and no call is made.
+        if let Some(&PrimRef::Object(o)) = self.prims.get(hit.prim as usize) {
+            let obj = &self.objects[o as usize];
+            if let Shape::Parallelogram(p) = &obj.shape {
+                let g = p.geometry(hit.uv[0], hit.uv[1]);
+                return SurfaceInteraction {
+                    p: g.p,
+                    n: g.n,
+                    ns: g.ns,
+                    uv: g.uv,
+                    dpdu: g.dpdu,
+                    wo: -ray.d.normalize(),
+                    t: hit.t,
+                    prim: hit.prim,
+                    props: obj.props,
+                    frame: Some(p.frame()),
+                };
+            }
+        }
+        self.interaction_general(ray, hit, uv)
+    }
+
+    /// [`Geometry::interaction_with`] for every primitive but a parallelogram.
+    #[inline(never)]
+    fn interaction_general(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfaceInteraction {
         let sh = ShapeHit {
             t: hit.t,
             uv: hit.uv,
@@ -300,7 +327,7 @@ impl Geometry {
             }
             PrimRef::Triangle { mesh, tri } => {
                 let m = &self.meshes[mesh as usize];
-                (m.geometry(tri, hit.uv[0], hit.uv[1]), m.props, None)
+                (m.geometry_inline(tri, hit.uv[0], hit.uv[1]), m.props, None)
             }
         };
         SurfaceInteraction {
@@ -364,5 +391,66 @@ impl Geometry {
         // Flat shapes' ready frames do not survive a non-uniform scaling: computed on demand.
         si.frame = None;
         si
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{Point3, Vec3};
+    use crate::shape::{Cube, Parallelogram};
+
+    /// A parallelogram's hit resolved in the caller is the general path's interaction, bit for
+    /// bit; other shapes still take the general path.
+    #[test]
+    fn parallelogram_interactions_inline_match_the_general_path() {
+        let q = Parallelogram::new(
+            Point3::new(-1.0, -1.0, 0.5),
+            Vec3::new(2.0, 0.0, 0.25),
+            Vec3::new(0.0, 1.5, 0.0),
+        )
+        .unwrap();
+        let props = SurfaceProps {
+            material: 3,
+            emission: Some(1),
+            light: Some(0),
+        };
+        let g = Geometry::new(
+            vec![
+                Object {
+                    shape: Shape::Parallelogram(q),
+                    props,
+                },
+                Object {
+                    shape: Shape::Cube(Cube::new(Transform::translation(Vec3::new(
+                        0.0, 0.0, -3.0,
+                    )))),
+                    props: SurfaceProps::new(1),
+                },
+            ],
+            Vec::new(),
+        );
+        let mut hits = 0;
+        for (o, d) in [
+            (Point3::new(0.1, 0.2, 3.0), Vec3::new(0.01, -0.02, -1.0)),
+            (Point3::new(-0.5, 0.3, -2.0), Vec3::new(0.0, 0.1, 2.0)),
+            (Point3::new(0.2, 0.1, 5.0), Vec3::new(0.0, 0.0, -3.0)),
+        ] {
+            let ray = Ray::new(o, d);
+            for prim in 0..g.prim_count() {
+                let Some(hit) = g.intersect_prim(prim, &ray, &ShearedRay::new(&ray)) else {
+                    continue;
+                };
+                for uv in [false, true] {
+                    let (a, b) = (
+                        g.interaction_with(&ray, &hit, uv),
+                        g.interaction_general(&ray, &hit, uv),
+                    );
+                    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+                }
+                hits += 1;
+            }
+        }
+        assert!(hits >= 3, "{hits}");
     }
 }

@@ -148,6 +148,19 @@ impl Texture {
         match (self, w) {
             // Read straight from the texture: a colour merged from the two arms of `eval`
             // goes through the stack, in pieces a whole-vector load cannot be forwarded from.
+            // `from_rgb_whole`: the colour is made in one vector register, so that where the
+            // arms meet in memory (the other arms' results are returned there) it is written
+            // with one store, which a whole-vector load is forwarded from; `from_rgb` wrote
+            // it as two halves (a store-forwarding stall at every lookup).
+            (Texture::Uniform(c), Wavelengths::Rgb) => SampledSpectrum::from_rgb_whole(*c),
+            _ => self.spectral_varying(uv, w, role),
+        }
+    }
+
+    /// [`Texture::spectral`] for everything but a uniform colour in RGB mode.
+    #[inline(never)]
+    fn spectral_varying(&self, uv: Point2, w: &Wavelengths, role: RgbRole) -> SampledSpectrum {
+        match (self, w) {
             (Texture::Uniform(c), Wavelengths::Rgb) => SampledSpectrum::from_rgb(*c),
             (_, Wavelengths::Rgb) => SampledSpectrum::from_rgb(self.eval_varying(uv)),
             (Texture::Spectral { spectrum, .. }, Wavelengths::Sampled(s)) => spectrum.eval4(s),
@@ -229,6 +242,29 @@ impl Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_texture_gives_the_same_lanes_by_either_path() {
+        let w = Wavelengths::Rgb;
+        let c = Rgb::new(0.25, 0.5, 0.75);
+        let textures = [
+            Texture::Uniform(c),
+            Texture::Checkered {
+                c1: c,
+                c2: Rgb::splat(2.0),
+                steps: [2.0; 2],
+                offset: [0.0; 2],
+            },
+            Texture::spectrum(Spectrum::Constant(0.5), c),
+        ];
+        for t in &textures {
+            for uv in [Point2::new(0.25, 0.25), Point2::new(0.75, 0.25)] {
+                let want = SampledSpectrum::from_rgb(t.eval(uv));
+                assert_eq!(t.spectral(uv, &w, RgbRole::Reflectance), want);
+                assert_eq!(t.spectral_varying(uv, &w, RgbRole::Reflectance), want);
+            }
+        }
+    }
 
     #[test]
     fn checkered_follows_the_course() {

@@ -16,7 +16,9 @@ use crate::shape::{Cube, Disk, LocalGeometry, Mesh, Parallelogram, Sphere};
 use crate::spectrum::Wavelengths;
 
 /// The sampleable shape of an area light.
+// An explicit tag: a match reads one byte, where the niche in a field cost six instructions.
 #[derive(Clone, Debug, PartialEq)]
+#[repr(u8)]
 pub enum AreaShape {
     /// A sphere; `cone` holds its centre and radius when its placement is a similarity.
     Sphere {
@@ -178,6 +180,29 @@ impl AreaLight {
         let det = c0.dot(c1.cross(c2)).abs();
         let scale = det * t.normal(q.to_normal()).to_vec().norm();
         1.0 / (4.0 * PI * scale)
+    }
+
+    /// [`AreaLight::sample`] for a parallelogram light (`None` for other shapes; `Some(None)`
+    /// when the sample is unusable).
+    #[inline(always)]
+    pub(super) fn sample_parallelogram(
+        &self,
+        emissions: &[Emission],
+        p: Point3,
+        u: [f32; 2],
+        lambda: &Wavelengths,
+    ) -> Option<Option<LightSample>> {
+        let AreaShape::Parallelogram(q) = &self.shape else {
+            return None;
+        };
+        let emission = &emissions[self.emission as usize];
+        Some(area_sample(
+            emission,
+            p,
+            q.geometry(u[0], u[1]),
+            self.inv_area,
+            lambda,
+        ))
     }
 
     /// Samples a point of the light seen from `p`: the direction, emitted radiance towards `p`,

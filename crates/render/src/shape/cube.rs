@@ -134,14 +134,16 @@ impl Cube {
         })
     }
 
-    /// The surface where the ray crosses `face` at `t`.
+    /// The surface where the ray crosses `face` at `t` (inlined: returned from a call, the
+    /// surface went through memory in other pieces than the caller read back).
+    #[inline(always)]
     pub fn geometry(&self, ray: &Ray, t: f32, face: u32) -> LocalGeometry {
         let q = self.local_origin(ray.o) + self.world_from_object.inv_vector(ray.d) * t;
         self.surface(face, q)
     }
 
     /// The surface of `face` at the object-space point `q` (snapped onto the face).
-    #[inline]
+    #[inline(always)]
     pub fn surface(&self, face: u32, q: Point3) -> LocalGeometry {
         let axis = (face / 2) as usize;
         let sign = if face % 2 == 1 { 1.0 } else { -1.0 };

@@ -138,6 +138,13 @@ impl Mesh {
 
     /// The surface of triangle `i` at barycentrics (β, γ).
     pub fn geometry(&self, i: u32, beta: f32, gamma: f32) -> LocalGeometry {
+        self.geometry_inline(i, beta, gamma)
+    }
+
+    /// [`Mesh::geometry`], inlined where a scene's hits are resolved (returned from a call,
+    /// the surface went through memory in other pieces than the caller read back).
+    #[inline(always)]
+    pub(crate) fn geometry_inline(&self, i: u32, beta: f32, gamma: f32) -> LocalGeometry {
         let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);
         let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
         let alpha = 1.0 - beta - gamma;

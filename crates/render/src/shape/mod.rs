@@ -65,7 +65,10 @@ pub struct LocalGeometry {
 }
 
 /// The closed set of shape types (besides mesh triangles).
+// An explicit tag: a match reads one byte, where the niche in a field cost six instructions
+// at every interaction.
 #[derive(Clone, Debug, PartialEq)]
+#[repr(u8)]
 pub enum Shape {
     /// The unit sphere, transformed.
     Sphere(Sphere),

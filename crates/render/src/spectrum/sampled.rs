@@ -11,6 +11,7 @@ use std::ops::{
 };
 
 use crate::color::Rgb;
+use crate::simd::F4;
 
 /// Number of lanes of a [`SampledSpectrum`] (and of wavelengths a path carries).
 pub const N_SPECTRUM_SAMPLES: usize = 4;
@@ -43,6 +44,17 @@ impl SampledSpectrum {
     #[inline]
     pub const fn from_rgb(c: Rgb) -> Self {
         Self([c.r, c.g, c.b, c.g])
+    }
+
+    /// [`SampledSpectrum::from_rgb`], the same bits, made in one vector register: stored to
+    /// memory, it is written whole, so that a whole-vector load of it is forwarded from the
+    /// store (LLVM copies `from_rgb`'s lanes from a colour in memory as two 8-byte halves,
+    /// which a 16-byte load cannot be forwarded from). An SSE `max` of the vector with itself
+    /// (each lane keeps its bits, NaN included) is what keeps it one vector.
+    #[inline(always)]
+    pub fn from_rgb_whole(c: Rgb) -> Self {
+        let v = F4::load(&[c.r, c.g, c.b, c.g]);
+        Self(v.max_keep(v).to_array())
     }
 
     /// Lanes 0–2 as RGB (RGB mode; lane 3 is ignored).
@@ -259,6 +271,21 @@ impl Neg for SampledSpectrum {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn from_rgb_whole_keeps_every_bit() {
+        for c in [
+            Rgb::new(0.25, -0.0, 3.0e38),
+            Rgb::new(f32::NAN, f32::INFINITY, f32::from_bits(0x0000_0001)),
+            Rgb::new(-1.0, f32::NEG_INFINITY, 0.0),
+        ] {
+            let (a, b) = (
+                SampledSpectrum::from_rgb(c),
+                SampledSpectrum::from_rgb_whole(c),
+            );
+            assert_eq!(a.0.map(f32::to_bits), b.0.map(f32::to_bits));
+        }
+    }
 
     #[test]
     fn arithmetic_is_lanewise() {
