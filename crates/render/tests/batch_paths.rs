@@ -138,6 +138,40 @@ fn mixed_scene(spectral: bool) -> Scene {
     scene
 }
 
+/// The Cornell box lit by three point lights only (its ceiling light does not emit): every
+/// vertex samples every light, each with its own shadow ray.
+fn delta_lit_scene(spectral: bool) -> Scene {
+    let base = support::radiosity::cornell(AccelKind::Bvh);
+    let mut b = SceneBuilder::new();
+    for mat in &base.materials {
+        b.add_material(mat.clone());
+    }
+    for o in base.geometry.objects() {
+        b.add_shape(o.shape.clone(), o.props.material, None);
+    }
+    for (p, i) in [
+        (Point3::new(0.3, 0.8, 0.5), 0.4),
+        (Point3::new(-0.5, 0.2, 0.9), 0.2),
+        (Point3::new(0.0, 0.9, -0.6), 0.7),
+    ] {
+        b.add_light(Light::Point(
+            PointLight {
+                position: p,
+                intensity: Rgb::splat(i),
+                spectrum: None,
+                falloff: Default::default(),
+            },
+            Components::from_intensity(Rgb::splat(i)),
+        ));
+    }
+    b.camera(base.camera);
+    let mut scene = b.build(AccelKind::Bvh);
+    if spectral {
+        scene.prepare_spectral();
+    }
+    scene
+}
+
 /// Samples `first..last` of pixel (x, y) of a 32 × 32 image, traced as one queue and one by
 /// one: the same radiance and wavelengths, bit for bit.
 fn check(scene: &Scene, pixel: (usize, usize), range: (u32, u32), spp: u32) {
@@ -243,6 +277,16 @@ fn every_kind_of_vertex_in_a_batch_agrees_with_single_paths_in_rgb_and_spectral_
             ((28, 3), (0, 64), 64),
             ((9, 9), (0, 64), 64),
         ] {
+            check_in(&scene, pixel, range, spp, spectral);
+        }
+    }
+}
+
+#[test]
+fn paths_sampling_every_delta_light_agree_in_batches_and_alone() {
+    for spectral in [false, true] {
+        let scene = delta_lit_scene(spectral);
+        for (pixel, range, spp) in [((16, 16), (0, 64), 64), ((5, 20), (3, 40), 64)] {
             check_in(&scene, pixel, range, spp, spectral);
         }
     }

@@ -442,3 +442,74 @@ fn a_sole_light_beside_a_constant_sky_is_always_picked() {
         }
     }
 }
+
+/// A diffuse plane lit by three point lights only: every vertex samples every light (no
+/// choice among them), so a camera ray hitting the plane gets the exact direct illumination
+/// ρ/π · Σ I·cos θ / d², whatever the sample, and nothing else (a plane sends no light back to
+/// itself).
+#[test]
+fn every_delta_light_gives_the_exact_direct_illumination() {
+    use candela_render::integrator::{Integrator, Path};
+    use candela_render::sampling::{Sampler, SamplerKind};
+    let rho = 0.6;
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(rho))));
+    let plane = Parallelogram::new(
+        Point3::new(-50.0, -50.0, 0.0),
+        Vec3::new(100.0, 0.0, 0.0),
+        Vec3::new(0.0, 100.0, 0.0),
+    )
+    .expect("plane");
+    b.add_shape(Shape::Parallelogram(plane), m, None);
+    let lights = [
+        (Point3::new(0.5, 0.2, 1.0), Rgb::new(2.0, 1.0, 0.5)),
+        (Point3::new(-1.5, 0.7, 2.0), Rgb::new(1.0, 3.0, 1.0)),
+        (Point3::new(0.1, -2.0, 0.6), Rgb::new(0.5, 0.5, 4.0)),
+    ];
+    for (position, intensity) in lights {
+        b.add_light(Light::Point(
+            PointLight {
+                position,
+                intensity,
+                spectrum: None,
+                falloff: Falloff::INVERSE_SQUARE,
+            },
+            Components::from_intensity(intensity),
+        ));
+    }
+    let scene = b.build(AccelKind::Bvh);
+    let mut expected = [0f64; 3];
+    for (q, i) in lights {
+        let to = q.to_vec();
+        let d2 = to.squared_norm() as f64;
+        let cos = to.z as f64 / d2.sqrt();
+        for (e, c) in expected.iter_mut().zip([i.r, i.g, i.b]) {
+            *e += rho as f64 / std::f64::consts::PI * c as f64 * cos / d2;
+        }
+    }
+    let path = Path {
+        max_depth: Some(8),
+        rr_depth: 5,
+        hide_emitters: false,
+    };
+    let ray = Ray::new(Point3::new(0.0, 0.0, 3.0), Vec3::new(0.0, 0.0, -1.0));
+    let mut sampler = Sampler::new(0, 0);
+    for index in 0..16 {
+        sampler.reset_for_pixel(SamplerKind::Independent, 9, index, 16);
+        sampler.pixel_sample(index as u32);
+        let mut lambda = Wavelengths::Rgb;
+        let l = path.radiance(
+            &scene,
+            &ray,
+            &mut lambda,
+            &mut sampler,
+            &mut RayStats::default(),
+        );
+        for (c, e) in l.to_rgb().to_array().into_iter().zip(expected) {
+            assert!(
+                ((c as f64) - e).abs() <= 1e-5 * e,
+                "sample {index}: {c} against {e}"
+            );
+        }
+    }
+}

@@ -95,6 +95,26 @@ impl PathState {
     }
 }
 
+/// The most lights a vertex samples all of (see [`every_light`]).
+const MAX_SHADOWS: usize = 8;
+
+/// The shadow rays of a vertex that samples every light, with what each adds.
+type Shadows = [Option<(Ray, SampledSpectrum)>; MAX_SHADOWS];
+
+/// True when every vertex samples every light, each with its own shadow ray, rather than
+/// one chosen by its importance: a scene of two to [`MAX_SHADOWS`] lights, all delta lights
+/// (point, spot, distant). Their light samples cost little and the choice of one would add its
+/// own variance (and the importances cost as much as the samples); BSDF sampling never finds a
+/// delta light, so there is nothing to weigh by MIS.
+#[inline]
+fn every_light(scene: &Scene) -> bool {
+    let lights = &scene.lights;
+    (2..=MAX_SHADOWS).contains(&lights.len())
+        && lights
+            .iter()
+            .all(|l| matches!(l, Light::Point(..) | Light::Spot(..) | Light::Distant(..)))
+}
+
 /// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
 /// ray is unblocked (next-event estimation), and whether the path goes on.
 struct VertexOutcome {
@@ -118,6 +138,7 @@ impl Path {
         hit: Option<Hit>,
         sampler: &mut Sampler,
         defer: Option<(&mut LambertLanes, usize)>,
+        every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
             shadow: None,
@@ -174,7 +195,9 @@ impl Path {
         }
 
         let material = scene.material(&si);
-        if let (Some((lanes, lane)), Model::Diffuse { reflectance }) = (defer, &material.model) {
+        if let (Some((lanes, lane)), Model::Diffuse { reflectance }, false) =
+            (defer, &material.model, every.is_some())
+        {
             // A Lambert vertex, left to the batch's Lambert lanes once its numbers are drawn
             // (in the order the scalar vertex below draws them, the roulette's even where the
             // path could end before it: it then goes unused). What `Material::bsdf`,
@@ -228,7 +251,24 @@ impl Path {
 
         // Next-event estimation (see `Path::sample_light`).
         let mut shadow = None;
-        if !bsdf.is_delta() {
+        if let (false, Some(every)) = (bsdf.is_delta(), every) {
+            // A few delta lights: every one of them, each with its shadow ray (see
+            // `every_light`), left in `every`.
+            let u = sampler.next_2d();
+            for (k, light) in lights.iter().enumerate() {
+                let ls = light.sample_from(&scene.geometry, &scene.emissions, &sp, u, &st.lambda);
+                if let Some(ls) = ls {
+                    let wi = bsdf.local_wi(ls.wi, flip);
+                    let f = bsdf.eval_local(wo, wi);
+                    if !f.is_black() {
+                        every[k] = Some((
+                            super::local::shadow_ray(&si, ls.wi, ls.target),
+                            st.beta * f * ls.li * (1.0 / ls.pdf),
+                        ));
+                    }
+                }
+            }
+        } else if !bsdf.is_delta() {
             if let Some((ls, pick_pdf)) = self.sample_light(scene, st, &sp, sampler) {
                 let wi = bsdf.local_wi(ls.wi, flip);
                 let f = bsdf.eval_local(wo, wi);
@@ -366,10 +406,12 @@ impl Integrator for Path {
         let mut st = PathState::new(camera_ray, *lambda);
         loop {
             let hit = scene.intersect(&st.ray, stats);
-            let Some(out) = self.vertex(scene, &mut st, hit, sampler, None) else {
+            let mut extra = [None; MAX_SHADOWS];
+            let every = every_light(scene).then_some(&mut extra);
+            let Some(out) = self.vertex(scene, &mut st, hit, sampler, None, every) else {
                 unreachable!("only a batch's lanes defer vertices");
             };
-            if let Some((ray, c)) = out.shadow {
+            for (ray, c) in out.shadow.into_iter().chain(extra.into_iter().flatten()) {
                 if !scene.occluded(&ray, stats) {
                     st.l += c;
                 }
@@ -411,13 +453,14 @@ impl Integrator for Path {
         let mut next = 0;
         let mut alive: u32 = 0;
         let mut hits = [None; BATCH];
-        let mut pending = [SampledSpectrum::ZERO; BATCH];
         // Only the active lanes are read: the batches are filled, not cleared, at each step.
         // `batch` holds each path's next ray from one step to the next (the Lambert lanes put
         // theirs there; the path's own copy is read back at once, so that the stores have
         // long retired when the next vertex loads it).
         let mut batch = RayBatch::default();
-        let mut shadows = RayBatch::default();
+        let mut shadows = [RayBatch::default(); MAX_SHADOWS];
+        let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
+        let every = every_light(scene);
         let mut lambert = LambertLanes::new();
         loop {
             if alive == 0 {
@@ -437,18 +480,34 @@ impl Integrator for Path {
             batch.active = alive;
             scene.intersect_batch(&batch, &mut hits, stats);
             scene.geometry.prefetch_interactions(&hits, alive);
-            shadows.active = 0;
+            for s in &mut shadows {
+                s.active = 0;
+            }
             let mut ended = 0u32;
             lambert.lanes = 0;
             for i in lanes(alive) {
                 let s = slot[i];
                 sampler.resume(cursors[s]);
-                let o = self.vertex(scene, &mut st[i], hits[i], sampler, Some((&mut lambert, i)));
+                let lanes = Some((&mut lambert, i));
+                let o = if every {
+                    let mut extra = [None; MAX_SHADOWS];
+                    let o =
+                        self.vertex(scene, &mut st[i], hits[i], sampler, lanes, Some(&mut extra));
+                    for (k, shadow) in extra.into_iter().enumerate() {
+                        if let Some((ray, c)) = shadow {
+                            shadows[k].set(i, &ray);
+                            pending[k][i] = c;
+                        }
+                    }
+                    o
+                } else {
+                    self.vertex(scene, &mut st[i], hits[i], sampler, lanes, None)
+                };
                 cursors[s] = sampler.cursor();
                 let Some(o) = o else { continue };
                 if let Some((ray, c)) = o.shadow {
-                    shadows.set(i, &ray);
-                    pending[i] = c;
+                    shadows[0].set(i, &ray);
+                    pending[0][i] = c;
                 }
                 if o.alive {
                     batch.set(i, &st[i].ray);
@@ -457,7 +516,7 @@ impl Integrator for Path {
                 }
             }
             if lambert.lanes != 0 {
-                lambert.shade(&mut batch, &mut shadows, &mut pending);
+                lambert.shade(&mut batch, &mut shadows[0], &mut pending[0]);
                 for i in lanes(lambert.lanes) {
                     let o = lambert.finish(i);
                     let st = &mut st[i];
@@ -471,10 +530,12 @@ impl Integrator for Path {
                     }
                 }
             }
-            if shadows.active != 0 {
-                let blocked = scene.occluded_batch(&shadows, stats);
-                for i in lanes(shadows.active & !blocked) {
-                    st[i].l += pending[i];
+            for (shadows, pending) in shadows.iter().zip(&pending) {
+                if shadows.active != 0 {
+                    let blocked = scene.occluded_batch(shadows, stats);
+                    for i in lanes(shadows.active & !blocked) {
+                        st[i].l += pending[i];
+                    }
                 }
             }
             alive &= !ended;
