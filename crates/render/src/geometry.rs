@@ -288,11 +288,28 @@ impl Geometry {
                     frame: Some(p.frame()),
                 };
             }
+            // Spheres (without texture coordinates), likewise.
+            if let (Shape::Sphere(s), false) = (&obj.shape, uv) {
+                let g = s.geometry_without_uv(ray, hit.t);
+                return SurfaceInteraction {
+                    p: g.p,
+                    n: g.n,
+                    ns: g.ns,
+                    uv: g.uv,
+                    dpdu: g.dpdu,
+                    wo: -ray.d.normalize(),
+                    t: hit.t,
+                    prim: hit.prim,
+                    props: obj.props,
+                    frame: None,
+                };
+            }
         }
         self.interaction_general(ray, hit, uv)
     }
 
-    /// [`Geometry::interaction_with`] for every primitive but a parallelogram.
+    /// [`Geometry::interaction_with`] for every primitive but a parallelogram and a sphere
+    /// without texture coordinates.
     #[inline(never)]
     fn interaction_general(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfaceInteraction {
         let sh = ShapeHit {

@@ -71,6 +71,7 @@ impl Sphere {
 
     /// [`Sphere::geometry`] without texture coordinates (left at zero): for scenes where no
     /// texture reads them, which spares an arctangent and an arccosine per hit.
+    #[inline(always)]
     pub fn geometry_without_uv(&self, ray: &Ray, t: f32) -> LocalGeometry {
         local_geometry(&self.world_from_object, self.object_hit(ray, t), false)
     }
