@@ -50,7 +50,9 @@ impl Wavelengths {
     #[inline]
     pub fn colour(&self, c: Rgb, role: RgbRole) -> SampledSpectrum {
         match self {
-            Self::Rgb => SampledSpectrum::from_rgb(c),
+            // Made whole in a register (see `SampledSpectrum::from_rgb_whole`): the colour
+            // meets the other arm's result in memory, where a later whole load reads it.
+            Self::Rgb => SampledSpectrum::from_rgb_whole(c),
             Self::Sampled(w) => upsample_fast(c, role, w),
         }
     }
@@ -66,7 +68,7 @@ impl Wavelengths {
     #[inline]
     pub fn spectrum(&self, s: &Spectrum, rgb: Rgb) -> SampledSpectrum {
         match self {
-            Self::Rgb => SampledSpectrum::from_rgb(rgb),
+            Self::Rgb => SampledSpectrum::from_rgb_whole(rgb),
             Self::Sampled(w) => s.eval4(w),
         }
     }
