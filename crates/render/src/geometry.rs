@@ -13,8 +13,8 @@
 use std::sync::Arc;
 
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
-use crate::math::{Bounds3, Ray, Transform};
-use crate::shape::{Mesh, Shape, ShapeHit, ShearedRay};
+use crate::math::{Bounds3, Frame, Ray, Transform};
+use crate::shape::{LocalGeometry, Mesh, Shape, ShapeHit, ShearedRay};
 
 /// Geometries of at least this many primitives prefetch what shading their hits reads
 /// ([`Geometry::prefetch_interactions`]); smaller ones stay in the caches.
@@ -273,36 +273,17 @@ impl Geometry {
         // other pieces than the caller reads back), and no call is made.
         if let Some(&PrimRef::Object(o)) = self.prims.get(hit.prim as usize) {
             let obj = &self.objects[o as usize];
-            if let Shape::Parallelogram(p) = &obj.shape {
-                let g = p.geometry(hit.uv[0], hit.uv[1]);
-                return SurfaceInteraction {
-                    p: g.p,
-                    n: g.n,
-                    ns: g.ns,
-                    uv: g.uv,
-                    dpdu: g.dpdu,
-                    wo: -ray.d.normalize(),
-                    t: hit.t,
-                    prim: hit.prim,
-                    props: obj.props,
-                    frame: Some(p.frame()),
-                };
-            }
-            // Spheres (without texture coordinates), likewise.
-            if let (Shape::Sphere(s), false) = (&obj.shape, uv) {
-                let g = s.geometry_without_uv(ray, hit.t);
-                return SurfaceInteraction {
-                    p: g.p,
-                    n: g.n,
-                    ns: g.ns,
-                    uv: g.uv,
-                    dpdu: g.dpdu,
-                    wo: -ray.d.normalize(),
-                    t: hit.t,
-                    prim: hit.prim,
-                    props: obj.props,
-                    frame: None,
-                };
+            match (&obj.shape, uv) {
+                (Shape::Parallelogram(p), _) => {
+                    let g = p.geometry(hit.uv[0], hit.uv[1]);
+                    return surface_interaction(ray, hit, g, obj.props, Some(p.frame()));
+                }
+                // Spheres (without texture coordinates), likewise.
+                (Shape::Sphere(s), false) => {
+                    let g = s.geometry_without_uv(ray, hit.t);
+                    return surface_interaction(ray, hit, g, obj.props, None);
+                }
+                _ => {}
             }
         }
         self.interaction_general(ray, hit, uv)
@@ -347,18 +328,7 @@ impl Geometry {
                 (m.geometry_inline(tri, hit.uv[0], hit.uv[1]), m.props, None)
             }
         };
-        SurfaceInteraction {
-            p: g.p,
-            n: g.n,
-            ns: g.ns,
-            uv: g.uv,
-            dpdu: g.dpdu,
-            wo: -ray.d.normalize(),
-            t: hit.t,
-            prim: hit.prim,
-            props,
-            frame,
-        }
+        surface_interaction(ray, hit, g, props, frame)
     }
 
     /// [`Geometry::interaction`] for a hit in an instance: the group's interaction along the
@@ -408,6 +378,29 @@ impl Geometry {
         // Flat shapes' ready frames do not survive a non-uniform scaling: computed on demand.
         si.frame = None;
         si
+    }
+}
+
+/// The interaction of `hit` along `ray` from its surface `g`.
+#[inline(always)]
+fn surface_interaction(
+    ray: &Ray,
+    hit: &Hit,
+    g: LocalGeometry,
+    props: SurfaceProps,
+    frame: Option<Frame>,
+) -> SurfaceInteraction {
+    SurfaceInteraction {
+        p: g.p,
+        n: g.n,
+        ns: g.ns,
+        uv: g.uv,
+        dpdu: g.dpdu,
+        wo: -ray.d.normalize(),
+        t: hit.t,
+        prim: hit.prim,
+        props,
+        frame,
     }
 }
 

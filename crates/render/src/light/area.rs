@@ -183,7 +183,8 @@ impl AreaLight {
     }
 
     /// [`AreaLight::sample`] for a parallelogram light (`None` for other shapes; `Some(None)`
-    /// when the sample is unusable).
+    /// when the sample is unusable). The path tracer's Lambert lanes repeat it on sixteen lanes
+    /// (`integrator/path/lambert_lanes.rs`): change both.
     #[inline(always)]
     pub(super) fn sample_parallelogram(
         &self,

@@ -112,7 +112,8 @@ pub fn offset_ray_origin(p: Point3, n: Normal3, w: Vec3) -> Point3 {
 /// [`offset_ray_origin`] for a unit normal `n`: each coordinate moves by 256·n ULPs (its bits
 /// moved away from zero for a positive offset), or by n/65536 near the origin (|p| < 1/32)
 /// where ULPs are too small. The three coordinates are moved at once (SSE2); the result is the
-/// same as coordinate by coordinate, the −0.0 case included (it is near the origin).
+/// same as coordinate by coordinate, the −0.0 case included (it is near the origin). The path
+/// tracer's Lambert lanes repeat it on sixteen lanes (`integrator/path/lambert_lanes.rs`).
 #[inline(always)]
 fn offset_unit(p: Point3, n: Normal3, w: Vec3) -> Point3 {
     const ORIGIN: f32 = 1.0 / 32.0;

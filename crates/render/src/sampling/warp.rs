@@ -35,7 +35,8 @@ fn sin_cos_quarter(x: f32) -> (f32, f32) {
     (s, c)
 }
 
-/// Cosine-weighted direction on the hemisphere z > 0 (Malley's method).
+/// Cosine-weighted direction on the hemisphere z > 0 (Malley's method). The path tracer's
+/// Lambert lanes repeat it on sixteen lanes (`integrator/path/lambert_lanes.rs`): change both.
 #[inline]
 pub fn square_to_cosine_hemisphere(u: [f32; 2]) -> Vec3 {
     let d = square_to_concentric_disk(u);

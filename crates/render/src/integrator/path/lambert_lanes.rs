@@ -27,10 +27,10 @@ use crate::texture::Texture;
 
 /// Sixteen f32 lanes.
 type L = [f32; BATCH];
-const Z: L = [0.0; BATCH];
 
 /// The deferred Lambert vertices of a batch step, structure of arrays: lane i is the path in
-/// lane i of the batch.
+/// lane i of the batch (`Default`: no lanes).
+#[derive(Default)]
 pub(super) struct LambertLanes {
     /// The lanes in use.
     pub(super) lanes: u32,
@@ -141,48 +141,6 @@ pub(super) struct LambertOutcome {
 }
 
 impl LambertLanes {
-    /// No lanes.
-    pub(super) fn new() -> Self {
-        Self {
-            lanes: 0,
-            p_x: [Z; 3],
-            ng_x: [Z; 3],
-            s: [Z; 3],
-            t: [Z; 3],
-            n: [Z; 3],
-            wo_z: Z,
-            flip: 0,
-            r: [Z; 4],
-            beta: [Z; 4],
-            light: 0,
-            delta: 0,
-            light_wi: [Z; 3],
-            li: [Z; 4],
-            pdf_light: Z,
-            rect: 0,
-            q_p: [Z; 3],
-            q_v: [Z; 3],
-            q_w: [Z; 3],
-            q_n: [Z; 3],
-            inv_area: Z,
-            two_sided: 0,
-            u_light: [Z; 2],
-            pick_pdf: Z,
-            q_at: [Z; 3],
-            u2: [Z; 2],
-            u_rr: Z,
-            roulette: 0,
-            eta_scale: Z,
-            to_surface: 0,
-            to_point: 0,
-            shadow: 0,
-            c: [Z; 4],
-            alive: 0,
-            pdf: Z,
-            beta_out: [Z; 4],
-        }
-    }
-
     /// Puts lane `i`'s vertex in.
     #[inline(always)]
     pub(super) fn set(&mut self, i: usize, v: &LambertVertex) {
@@ -350,21 +308,12 @@ impl LambertLanes {
     }
 }
 
-/// Lane `i` of `a`: the texture `t` at `uv` in the lanes of `w` (`Texture::spectral`), a
-/// uniform colour in RGB mode stored channel by channel (not merged with the other cases into
-/// one value first: its pieces could not be forwarded to a whole-vector load).
+/// Lane `i` of `a`: the texture `t` at `uv` in the lanes of `w` (`Texture::spectral`).
 #[inline(always)]
 fn put_texture(a: &mut [L; 4], i: usize, t: &Texture, uv: Point2, w: &Wavelengths, role: RgbRole) {
-    if let (Texture::Uniform(c), Wavelengths::Rgb) = (t, w) {
-        a[0][i] = c.r;
-        a[1][i] = c.g;
-        a[2][i] = c.b;
-        a[3][i] = c.g;
-    } else {
-        let s = t.spectral(uv, w, role);
-        for k in 0..4 {
-            a[k][i] = s.0[k];
-        }
+    let s = t.spectral(uv, w, role);
+    for k in 0..4 {
+        a[k][i] = s.0[k];
     }
 }
 
@@ -727,7 +676,7 @@ mod tests {
                 Parallelogram::new(p, v(rng), v(rng)).expect("quad")
             })
             .collect();
-        let mut lanes = LambertLanes::new();
+        let mut lanes = LambertLanes::default();
         for (i, q) in quads.iter().enumerate() {
             let n = v(rng).normalize();
             let frame = Frame::from_normal(n.to_normal());

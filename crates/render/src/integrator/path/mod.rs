@@ -404,14 +404,26 @@ impl Integrator for Path {
         stats: &mut RayStats,
     ) -> SampledSpectrum {
         let mut st = PathState::new(camera_ray, *lambda);
+        let every = every_light(scene);
+        let mut extra = [None; MAX_SHADOWS];
         loop {
             let hit = scene.intersect(&st.ray, stats);
-            let mut extra = [None; MAX_SHADOWS];
-            let every = every_light(scene).then_some(&mut extra);
-            let Some(out) = self.vertex(scene, &mut st, hit, sampler, None, every) else {
+            let o = self.vertex(
+                scene,
+                &mut st,
+                hit,
+                sampler,
+                None,
+                every.then_some(&mut extra),
+            );
+            let Some(out) = o else {
                 unreachable!("only a batch's lanes defer vertices");
             };
-            for (ray, c) in out.shadow.into_iter().chain(extra.into_iter().flatten()) {
+            for (ray, c) in out
+                .shadow
+                .into_iter()
+                .chain(extra.iter_mut().filter_map(Option::take))
+            {
                 if !scene.occluded(&ray, stats) {
                     st.l += c;
                 }
@@ -461,7 +473,7 @@ impl Integrator for Path {
         let mut shadows = [RayBatch::default(); MAX_SHADOWS];
         let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
         let every = every_light(scene);
-        let mut lambert = LambertLanes::new();
+        let mut lambert = LambertLanes::default();
         loop {
             if alive == 0 {
                 if next == n {
