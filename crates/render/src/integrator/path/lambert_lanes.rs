@@ -7,6 +7,8 @@
 //! estimation, the cosine-weighted sample of the next direction, the throughput and Russian
 //! roulette. [`LambertLanes::shade`] does these for all such lanes with the sixteen-lane
 //! operations of [`crate::simd::Wide`], and [`LambertLanes::finish`] makes each lane's rays.
+//! A scene that samples every light at each vertex (`super::every_light`) hands over one light
+//! sample per light, each with its own batch of shadow rays.
 //!
 //! Every operation is the one the scalar vertex makes ([`crate::material::Bsdf`] with a Lambert
 //! model, [`crate::sampling::warp`], [`power_heuristic`](crate::sampling::warp::power_heuristic)),
@@ -15,7 +17,8 @@
 //! and square root, no fused multiply-add; the NaN cases of `max`/`min` aside, which a finite
 //! throughput never meets).
 
-use crate::light::Target;
+use super::MAX_SHADOWS;
+use crate::light::{LightSample, Target};
 use crate::math::{
     Frame, Normal3, Point2, Point3, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON,
 };
@@ -27,6 +30,12 @@ use crate::texture::Texture;
 
 /// Sixteen f32 lanes.
 type L = [f32; BATCH];
+
+/// The shadow rays of each light sample of a batch step.
+pub(super) type Shadows = [RayBatch; MAX_SHADOWS];
+
+/// What each light sample's shadow ray adds when unoccluded, lane by lane.
+pub(super) type Pending = [[SampledSpectrum; BATCH]; MAX_SHADOWS];
 
 /// The deferred Lambert vertices of a batch step, structure of arrays: lane i is the path in
 /// lane i of the batch (`Default`: no lanes).
@@ -46,45 +55,56 @@ pub(super) struct LambertLanes {
     /// Reflectance and the throughput before the vertex.
     r: [L; 4],
     beta: [L; 4],
-    /// Lanes with a light sample; of those, the delta lights.
-    light: u32,
-    delta: u32,
-    /// The light sample: world direction, radiance, density including the pick.
-    light_wi: [L; 3],
-    li: [L; 4],
-    pdf_light: L,
-    /// Lanes whose light is a parallelogram of uniform radiance, sampled here: its corner,
-    /// edges and unit normal, 1/area, which of them emit on both sides, the light's numbers
-    /// and the pick's probability (the radiance is in `li`).
+    /// The light samples of the lanes: one per lane, or in the every-light mode (see
+    /// `super::every_light`) one per light of the scene, each with its own shadow ray.
+    lights: [LightLanes; MAX_SHADOWS],
+    /// How many of `lights` are in use beyond the first: none, or in the every-light mode the
+    /// number of lights less one.
+    pub(super) extra: usize,
+    /// Lanes whose first light is a parallelogram of uniform radiance, sampled here: its
+    /// corner, edges and unit normal (in the first light's `n`), 1/area, which of them emit on
+    /// both sides, the light's numbers and the pick's probability (the radiance is in the
+    /// first light's `li`, the sampled point goes to its `at`).
     rect: u32,
     q_p: [L; 3],
     q_v: [L; 3],
     q_w: [L; 3],
-    q_n: [L; 3],
     inv_area: L,
     two_sided: u32,
     u_light: [L; 2],
     pick_pdf: L,
-    /// The sampled points on those lights (the shadow rays' targets).
-    q_at: [L; 3],
     /// The direction sample's numbers, the roulette number and where it is played.
     u2: [L; 2],
     u_rr: L,
     roulette: u32,
     eta_scale: L,
-    /// Where the shadow rays of light samples made by the lights go: a point on a surface
-    /// (its normal in `q_n`), a point in space (both in `q_at`), or infinitely far.
-    to_surface: u32,
-    to_point: u32,
     // Outputs.
-    /// Lanes whose light sample adds `c` when unoccluded.
-    shadow: u32,
-    c: [L; 4],
     /// Lanes whose path goes on, with the direction's density `pdf` and throughput
     /// `beta_out`.
     alive: u32,
     pdf: L,
     beta_out: [L; 4],
+}
+
+/// One light sample per lane, structure of arrays (`Default`: none).
+#[derive(Default)]
+struct LightLanes {
+    /// Lanes with a light sample; of those, the delta lights.
+    light: u32,
+    delta: u32,
+    /// The light sample: world direction, radiance, density including the pick.
+    wi: [L; 3],
+    li: [L; 4],
+    pdf: L,
+    /// Where the shadow rays go: a point on a surface (its normal in `n`), a point in space
+    /// (both in `at`), or infinitely far.
+    to_surface: u32,
+    to_point: u32,
+    at: [L; 3],
+    n: [L; 3],
+    /// Output: the lanes whose light sample adds `c` when unoccluded.
+    shadow: u32,
+    c: [L; 4],
 }
 
 /// What the scalar part of a vertex hands over for one Lambert lane.
@@ -134,6 +154,17 @@ pub(super) enum LaneLight<'a> {
     },
 }
 
+impl From<Option<LightSample>> for LaneLight<'_> {
+    /// A sample made by the light itself (no pick: its density is the light's alone).
+    #[inline(always)]
+    fn from(ls: Option<LightSample>) -> Self {
+        match ls {
+            Some(ls) => LaneLight::Sample(ls.wi, ls.li, ls.pdf, ls.delta, ls.target),
+            None => LaneLight::None,
+        }
+    }
+}
+
 /// What [`LambertLanes::finish`] gives for a lane: the path's next throughput and direction
 /// density (`None`: the path ends here).
 pub(super) struct LambertOutcome {
@@ -174,66 +205,38 @@ impl LambertLanes {
         for k in 0..4 {
             self.beta[k][i] = v.beta.0[k];
         }
-        self.light &= !bit;
-        self.delta &= !bit;
         self.rect &= !bit;
         self.two_sided &= !bit;
-        self.to_surface &= !bit;
-        self.to_point &= !bit;
-        let set3 = |a: &mut [L; 3], x: f32, y: f32, z: f32| {
-            a[0][i] = x;
-            a[1][i] = y;
-            a[2][i] = z;
-        };
-        match v.light {
-            LaneLight::None => {}
-            LaneLight::Sample(wi, li, pdf, delta, target) => {
-                self.light |= bit;
-                if delta {
-                    self.delta |= bit;
-                }
-                set3(&mut self.light_wi, wi.x, wi.y, wi.z);
-                for k in 0..4 {
-                    self.li[k][i] = li.0[k];
-                }
-                self.pdf_light[i] = pdf;
-                match target {
-                    Target::Surface(q, n) => {
-                        self.to_surface |= bit;
-                        set3(&mut self.q_at, q.x, q.y, q.z);
-                        set3(&mut self.q_n, n.x, n.y, n.z);
-                    }
-                    Target::Point(q) => {
-                        self.to_point |= bit;
-                        set3(&mut self.q_at, q.x, q.y, q.z);
-                    }
-                    Target::Infinite => {}
-                }
+        if let LaneLight::Rect {
+            q,
+            inv_area,
+            radiance,
+            two_sided,
+            u,
+            pick_pdf,
+        } = v.light
+        {
+            let l = &mut self.lights[0];
+            l.light &= !bit;
+            l.delta &= !bit;
+            l.to_surface &= !bit;
+            l.to_point &= !bit;
+            self.rect |= bit;
+            if two_sided {
+                self.two_sided |= bit;
             }
-            LaneLight::Rect {
-                q,
-                inv_area,
-                radiance,
-                two_sided,
-                u,
-                pick_pdf,
-            } => {
-                self.rect |= bit;
-                if two_sided {
-                    self.two_sided |= bit;
-                }
-                set3(&mut self.q_p, q.p.x, q.p.y, q.p.z);
-                set3(&mut self.q_v, q.v.x, q.v.y, q.v.z);
-                set3(&mut self.q_w, q.w.x, q.w.y, q.w.z);
-                let n = q.normal();
-                set3(&mut self.q_n, n.x, n.y, n.z);
-                self.inv_area[i] = inv_area;
-                let uv = Point2::new(0.0, 0.0);
-                put_texture(&mut self.li, i, radiance, uv, v.lambda, RgbRole::Emission);
-                self.u_light[0][i] = u[0];
-                self.u_light[1][i] = u[1];
-                self.pick_pdf[i] = pick_pdf;
-            }
+            set3(&mut self.q_p, i, q.p.to_vec());
+            set3(&mut self.q_v, i, q.v);
+            set3(&mut self.q_w, i, q.w);
+            set3(&mut l.n, i, q.normal().to_vec());
+            self.inv_area[i] = inv_area;
+            let uv = Point2::new(0.0, 0.0);
+            put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
+            self.u_light[0][i] = u[0];
+            self.u_light[1][i] = u[1];
+            self.pick_pdf[i] = pick_pdf;
+        } else {
+            self.set_light(i, 0, &v.light);
         }
         self.u2[0][i] = v.u2[0];
         self.u2[1][i] = v.u2[1];
@@ -245,17 +248,52 @@ impl LambertLanes {
         self.eta_scale[i] = v.eta_scale;
     }
 
+    /// Puts light sample `k` of lane `i` in (a light sample made by the light, or none; not a
+    /// parallelogram to sample here).
+    #[inline(always)]
+    pub(super) fn set_light(&mut self, i: usize, k: usize, light: &LaneLight) {
+        let bit = 1u32 << i;
+        let l = &mut self.lights[k];
+        l.light &= !bit;
+        l.delta &= !bit;
+        l.to_surface &= !bit;
+        l.to_point &= !bit;
+        if let LaneLight::Sample(wi, li, pdf, delta, target) = *light {
+            l.light |= bit;
+            if delta {
+                l.delta |= bit;
+            }
+            set3(&mut l.wi, i, wi);
+            for k in 0..4 {
+                l.li[k][i] = li.0[k];
+            }
+            l.pdf[i] = pdf;
+            match target {
+                Target::Surface(q, n) => {
+                    l.to_surface |= bit;
+                    set3(&mut l.at, i, q.to_vec());
+                    set3(&mut l.n, i, n.to_vec());
+                }
+                Target::Point(q) => {
+                    l.to_point |= bit;
+                    set3(&mut l.at, i, q.to_vec());
+                }
+                Target::Infinite => {}
+            }
+        }
+    }
+
     /// Shades every lane in use (sixteen lanes at once, at the widest instruction set the CPU
     /// has).
     ///
     /// The rays of the lanes whose path goes on go straight into `next`, and the shadow rays
-    /// to parallelogram lights into `shadows` (marked active there, with what they add in
-    /// `pending`); [`LambertLanes::finish`] gives the rest.
+    /// of light sample `k` into `shadows[k]` (marked active there, with what they add in
+    /// `pending[k]`); [`LambertLanes::finish`] gives the rest.
     pub(super) fn shade(
         &mut self,
         next: &mut RayBatch,
-        shadows: &mut RayBatch,
-        pending: &mut [SampledSpectrum; BATCH],
+        shadows: &mut Shadows,
+        pending: &mut Pending,
     ) {
         self.shade_at(SimdLevel::detected(), next, shadows, pending);
     }
@@ -266,26 +304,34 @@ impl LambertLanes {
         &mut self,
         level: SimdLevel,
         next: &mut RayBatch,
-        shadows: &mut RayBatch,
-        pending: &mut [SampledSpectrum; BATCH],
+        shadows: &mut Shadows,
+        pending: &mut Pending,
     ) {
         // Only the lanes in use count (the other lanes hold an earlier step's values).
         let m = self.lanes;
         for mask in [
             &mut self.flip,
-            &mut self.light,
-            &mut self.delta,
             &mut self.rect,
             &mut self.two_sided,
             &mut self.roulette,
-            &mut self.to_surface,
-            &mut self.to_point,
         ] {
             *mask &= m;
         }
+        for l in &mut self.lights[..=self.extra] {
+            for mask in [
+                &mut l.light,
+                &mut l.delta,
+                &mut l.to_surface,
+                &mut l.to_point,
+            ] {
+                *mask &= m;
+            }
+        }
         crate::simd::run_wide_at(level, Shade(self, next, shadows));
-        for i in crate::math::lanes(self.shadow) {
-            pending[i] = SampledSpectrum([self.c[0][i], self.c[1][i], self.c[2][i], self.c[3][i]]);
+        for (l, pending) in self.lights[..=self.extra].iter().zip(pending) {
+            for i in crate::math::lanes(l.shadow) {
+                pending[i] = SampledSpectrum([l.c[0][i], l.c[1][i], l.c[2][i], l.c[3][i]]);
+            }
         }
     }
 
@@ -308,6 +354,14 @@ impl LambertLanes {
     }
 }
 
+/// Lane `i` of `a`: the vector `v`.
+#[inline(always)]
+fn set3(a: &mut [L; 3], i: usize, v: Vec3) {
+    a[0][i] = v.x;
+    a[1][i] = v.y;
+    a[2][i] = v.z;
+}
+
 /// Lane `i` of `a`: the texture `t` at `uv` in the lanes of `w` (`Texture::spectral`).
 #[inline(always)]
 fn put_texture(a: &mut [L; 4], i: usize, t: &Texture, uv: Point2, w: &Wavelengths, role: RgbRole) {
@@ -318,7 +372,7 @@ fn put_texture(a: &mut [L; 4], i: usize, t: &Texture, uv: Point2, w: &Wavelength
 }
 
 /// [`LambertLanes::shade`] as a kernel.
-struct Shade<'a>(&'a mut LambertLanes, &'a mut RayBatch, &'a mut RayBatch);
+struct Shade<'a>(&'a mut LambertLanes, &'a mut RayBatch, &'a mut Shadows);
 
 impl WideKernel for Shade<'_> {
     type Output = ();
@@ -353,14 +407,16 @@ impl WideKernel for Shade<'_> {
         // p + v·s + w·t, the direction to it, and the density per solid angle.
         let rect = w.mask(x.rect);
         let pos = [w.load(&x.p_x[0]), w.load(&x.p_x[1]), w.load(&x.p_x[2])];
+        let ng = [w.load(&x.ng_x[0]), w.load(&x.ng_x[1]), w.load(&x.ng_x[2])];
         let (us, ut) = (w.load(&x.u_light[0]), w.load(&x.u_light[1]));
+        let l0 = &mut x.lights[0];
         let mut to = [zero; 3];
         for k in 0..3 {
             let q = w.add(
                 w.add(w.load(&x.q_p[k]), w.mul(w.load(&x.q_v[k]), us)),
                 w.mul(w.load(&x.q_w[k]), ut),
             );
-            put(w, rect, q, &mut x.q_at[k]);
+            put(w, rect, q, &mut l0.at[k]);
             to[k] = w.sub(q, pos[k]);
         }
         let d2 = w.add(
@@ -368,14 +424,13 @@ impl WideKernel for Shade<'_> {
             w.mul(to[2], to[2]),
         );
         let inv_d = w.div(one, w.sqrt(d2));
-        let qn = [w.load(&x.q_n[0]), w.load(&x.q_n[1]), w.load(&x.q_n[2])];
+        let qn = [w.load(&l0.n[0]), w.load(&l0.n[1]), w.load(&l0.n[2])];
         let mut lw = [zero; 3];
         let mut lw_finite = all;
         for k in 0..3 {
             let d = w.mul(to[k], inv_d);
             lw_finite = w.and(lw_finite, finite(w, d));
-            lw[k] = w.select(rect, d, w.load(&x.light_wi[k]));
-            w.store(lw[k], &mut x.light_wi[k]);
+            lw[k] = w.select(rect, d, w.load(&l0.wi[k]));
         }
         let cos = w.copysign(dot(w, qn, lw), one);
         let facing = w.or(
@@ -389,7 +444,7 @@ impl WideKernel for Shade<'_> {
         let mut li = [zero; 4];
         let mut li_nonzero = w.mask(0);
         for k in 0..4 {
-            let v = w.load(&x.li[k]);
+            let v = w.load(&l0.li[k]);
             li[k] = w.select(w.and(rect, w.and_not(all, facing)), zero, v);
             li_nonzero = w.or(li_nonzero, w.ne(li[k], zero));
         }
@@ -397,48 +452,49 @@ impl WideKernel for Shade<'_> {
             w.and(rect, w.and(w.gt(d2, zero), w.gt(cos, zero))),
             w.and(w.and(w.gt(pdf_rect, zero), lw_finite), li_nonzero),
         );
-        let light = w.or(w.and_not(w.mask(x.light), rect), rect_ok);
-        let pdf_light = w.select(
+        let light = w.or(w.and_not(w.mask(l0.light), rect), rect_ok);
+        let pdf_light = w.select(rect, w.mul(w.load(&x.pick_pdf), pdf_rect), w.load(&l0.pdf));
+        let at = Shading {
+            all,
+            pos,
+            ng,
+            n,
+            flip,
+            wo_up,
+            r,
+            beta,
+        };
+        let mut shadows = shadows.iter_mut();
+        let Some(first) = shadows.next() else {
+            return;
+        };
+        let ls = LaneSample {
+            wi: lw,
+            li,
+            on: light,
+            pdf: pdf_light,
             rect,
-            w.mul(w.load(&x.pick_pdf), pdf_rect),
-            w.load(&x.pdf_light),
-        );
-
-        // Next-event estimation: f·cos and the BSDF's density for the light's direction (only
-        // its local z matters to Lambert), the power heuristic against the light's density.
-        let iz = w.add(
-            w.add(w.mul(lw[0], n[0]), w.mul(lw[1], n[1])),
-            w.mul(lw[2], n[2]),
-        );
-        let iz = w.select(flip, w.neg(iz), iz);
-        let f_on = w.and(wo_up, positive(w, all, iz));
-        let cos_pi = w.mul(inv_pi, iz);
-        let mut f = [zero; 4];
-        let mut f_nonzero = w.mask(0);
-        for k in 0..4 {
-            f[k] = w.select(f_on, w.mul(r[k], cos_pi), zero);
-            f_nonzero = w.or(f_nonzero, w.ne(f[k], zero));
+        };
+        nee(w, &at, l0, ls, first);
+        // The every-light mode's other lights, sampled by the lights themselves.
+        for (l, shadows) in x.lights[1..=x.extra].iter_mut().zip(shadows) {
+            let lw = [w.load(&l.wi[0]), w.load(&l.wi[1]), w.load(&l.wi[2])];
+            let li = [
+                w.load(&l.li[0]),
+                w.load(&l.li[1]),
+                w.load(&l.li[2]),
+                w.load(&l.li[3]),
+            ];
+            let (light, pdf) = (w.mask(l.light), w.load(&l.pdf));
+            let ls = LaneSample {
+                wi: lw,
+                li,
+                on: light,
+                pdf,
+                rect: w.mask(0),
+            };
+            nee(w, &at, l, ls, shadows);
         }
-        let pdf_bsdf = w.select(w.and(wo_up, w.gt(iz, zero)), w.mul(iz, inv_pi), zero);
-        let ratio = w.div(pdf_bsdf, pdf_light);
-        let mis = w.select(
-            w.eq(pdf_light, w.splat(f32::INFINITY)),
-            one,
-            w.select(
-                w.gt(pdf_light, zero),
-                w.div(one, w.add(one, w.mul(ratio, ratio))),
-                zero,
-            ),
-        );
-        let mis = w.select(w.mask(x.delta), one, mis);
-        let scale = w.div(mis, pdf_light);
-        for k in 0..4 {
-            w.store(
-                w.mul(w.mul(w.mul(beta[k], f[k]), li[k]), scale),
-                &mut x.c[k],
-            );
-        }
-        x.shadow = w.bits(w.and(light, f_nonzero));
 
         // The next direction: Malley's method on Shirley and Chiu's concentric disk, with the
         // sine and cosine polynomials of `warp`.
@@ -525,7 +581,6 @@ impl WideKernel for Shade<'_> {
 
         // The rays, their origins moved off the surface as `Ray::spawn_unit` and
         // `Ray::spawn_between_unit` move them.
-        let ng = [w.load(&x.ng_x[0]), w.load(&x.ng_x[1]), w.load(&x.ng_x[2])];
         let o = offset(w, pos, ng, wi);
         for k in 0..3 {
             put(w, ok, o[k], &mut next.o[k]);
@@ -533,60 +588,152 @@ impl WideKernel for Shade<'_> {
         }
         put(w, ok, zero, &mut next.tmin);
         put(w, ok, w.splat(f32::INFINITY), &mut next.tmax);
-
-        // The shadow rays (`shadow_ray_from`): between two surface points, each moved off its
-        // surface; to a point in space, stopping short of it; or along the direction to a
-        // light at infinity.
-        let rays = w.and(light, f_nonzero);
-        let between = w.and(rays, w.or(rect, w.mask(x.to_surface)));
-        let towards = w.and(rays, w.mask(x.to_point));
-        let away = w.and_not(rays, w.or(between, towards));
-        if w.bits(rays) != 0 {
-            let q = [w.load(&x.q_at[0]), w.load(&x.q_at[1]), w.load(&x.q_at[2])];
-            let qn = [w.load(&x.q_n[0]), w.load(&x.q_n[1]), w.load(&x.q_n[2])];
-            let to_q = [
-                w.sub(q[0], pos[0]),
-                w.sub(q[1], pos[1]),
-                w.sub(q[2], pos[2]),
-            ];
-            // `Ray::spawn_to` normalises the normal again.
-            let len = w.sqrt(dot(w, ng, ng));
-            let inv = w.div(one, len);
-            let unit = w.gt(len, zero);
-            let mut ng_unit = ng;
-            for k in 0..3 {
-                ng_unit[k] = w.select(unit, w.mul(ng[k], inv), ng[k]);
-            }
-            let o_between = offset(w, pos, ng, to_q);
-            let o_towards = offset(w, pos, ng_unit, to_q);
-            let o_away = offset(w, pos, ng, lw);
-            let mut o = o_away;
-            let mut back = o_away;
-            for k in 0..3 {
-                o[k] = w.select(
-                    between,
-                    o_between[k],
-                    w.select(towards, o_towards[k], o_away[k]),
-                );
-                back[k] = w.sub(o[k], q[k]);
-            }
-            let t = offset(w, q, qn, back);
-            for k in 0..3 {
-                let d = w.select(
-                    between,
-                    w.sub(t[k], o[k]),
-                    w.select(towards, w.sub(q[k], o[k]), lw[k]),
-                );
-                put(w, rays, o[k], &mut shadows.o[k]);
-                put(w, rays, d, &mut shadows.d[k]);
-            }
-            put(w, rays, zero, &mut shadows.tmin);
-            let short = w.splat(1.0 - SHADOW_EPSILON);
-            let tmax = w.select(away, w.splat(f32::INFINITY), short);
-            put(w, rays, tmax, &mut shadows.tmax);
-            shadows.active |= w.bits(rays);
-        }
     }
+}
+
+/// What the light samples of a vertex's lanes share: the lanes in use, the shading point and
+/// its unit geometric normal, the shading normal, the mirrored lanes, the lanes seen from
+/// above, the reflectance and the throughput.
+struct Shading<W: Wide> {
+    all: W::M,
+    pos: [W::V; 3],
+    ng: [W::V; 3],
+    n: [W::V; 3],
+    flip: W::M,
+    wo_up: W::M,
+    r: [W::V; 4],
+    beta: [W::V; 4],
+}
+
+/// A light sample in the lanes: direction, radiance, the lanes that have one, its density
+/// (the pick's included), and the lanes where it is a parallelogram sampled here.
+struct LaneSample<W: Wide> {
+    wi: [W::V; 3],
+    li: [W::V; 4],
+    on: W::M,
+    pdf: W::V,
+    rect: W::M,
+}
+
+/// Next-event estimation for the light samples `ls` of the lanes of `l`:
+/// f·cos and the BSDF's density for the light's direction (only its local z matters to
+/// Lambert), the power heuristic against the light's density, what each adds (`l.c`) and
+/// its shadow ray (`shadow_ray_from`) in `shadows`: between two surface points, each moved
+/// off its surface; to a point in space, stopping short of it; or along the direction to a
+/// light at infinity.
+#[inline(always)]
+fn nee<W: Wide>(
+    w: W,
+    at: &Shading<W>,
+    l: &mut LightLanes,
+    ls: LaneSample<W>,
+    shadows: &mut RayBatch,
+) {
+    let (zero, one) = (w.splat(0.0), w.splat(1.0));
+    let LaneSample {
+        wi: lw,
+        li,
+        on: light,
+        pdf: pdf_light,
+        rect,
+    } = ls;
+    let Shading {
+        all,
+        pos,
+        ng,
+        n,
+        flip,
+        wo_up,
+        r,
+        beta,
+    } = *at;
+    let iz = w.add(
+        w.add(w.mul(lw[0], n[0]), w.mul(lw[1], n[1])),
+        w.mul(lw[2], n[2]),
+    );
+    let iz = w.select(flip, w.neg(iz), iz);
+    let f_on = w.and(wo_up, positive(w, all, iz));
+    let cos_pi = w.mul(w.splat(INV_PI), iz);
+    let mut f = [zero; 4];
+    let mut f_nonzero = w.mask(0);
+    for k in 0..4 {
+        f[k] = w.select(f_on, w.mul(r[k], cos_pi), zero);
+        f_nonzero = w.or(f_nonzero, w.ne(f[k], zero));
+    }
+    let pdf_bsdf = w.select(
+        w.and(wo_up, w.gt(iz, zero)),
+        w.mul(iz, w.splat(INV_PI)),
+        zero,
+    );
+    let ratio = w.div(pdf_bsdf, pdf_light);
+    let mis = w.select(
+        w.eq(pdf_light, w.splat(f32::INFINITY)),
+        one,
+        w.select(
+            w.gt(pdf_light, zero),
+            w.div(one, w.add(one, w.mul(ratio, ratio))),
+            zero,
+        ),
+    );
+    let mis = w.select(w.mask(l.delta), one, mis);
+    let scale = w.div(mis, pdf_light);
+    for k in 0..4 {
+        w.store(
+            w.mul(w.mul(w.mul(beta[k], f[k]), li[k]), scale),
+            &mut l.c[k],
+        );
+    }
+    let rays = w.and(light, f_nonzero);
+    l.shadow = w.bits(rays);
+    if l.shadow == 0 {
+        return;
+    }
+    let between = w.and(rays, w.or(rect, w.mask(l.to_surface)));
+    let towards = w.and(rays, w.mask(l.to_point));
+    let away = w.and_not(rays, w.or(between, towards));
+    let q = [w.load(&l.at[0]), w.load(&l.at[1]), w.load(&l.at[2])];
+    let qn = [w.load(&l.n[0]), w.load(&l.n[1]), w.load(&l.n[2])];
+    let to_q = [
+        w.sub(q[0], pos[0]),
+        w.sub(q[1], pos[1]),
+        w.sub(q[2], pos[2]),
+    ];
+    // `Ray::spawn_to` normalises the normal again.
+    let len = w.sqrt(dot(w, ng, ng));
+    let inv = w.div(one, len);
+    let unit = w.gt(len, zero);
+    let mut ng_unit = ng;
+    for k in 0..3 {
+        ng_unit[k] = w.select(unit, w.mul(ng[k], inv), ng[k]);
+    }
+    let o_between = offset(w, pos, ng, to_q);
+    let o_towards = offset(w, pos, ng_unit, to_q);
+    let o_away = offset(w, pos, ng, lw);
+    let mut o = o_away;
+    let mut back = o_away;
+    for k in 0..3 {
+        o[k] = w.select(
+            between,
+            o_between[k],
+            w.select(towards, o_towards[k], o_away[k]),
+        );
+        back[k] = w.sub(o[k], q[k]);
+    }
+    let t = offset(w, q, qn, back);
+    for k in 0..3 {
+        let d = w.select(
+            between,
+            w.sub(t[k], o[k]),
+            w.select(towards, w.sub(q[k], o[k]), lw[k]),
+        );
+        put(w, rays, o[k], &mut shadows.o[k]);
+        put(w, rays, d, &mut shadows.d[k]);
+    }
+    put(w, rays, zero, &mut shadows.tmin);
+    let short = w.splat(1.0 - SHADOW_EPSILON);
+    let tmax = w.select(away, w.splat(f32::INFINITY), short);
+    put(w, rays, tmax, &mut shadows.tmax);
+    shadows.active |= l.shadow;
 }
 
 /// `!(a <= 0)` in the lanes of `all`: the scalar code's tests, NaN included.
@@ -724,7 +871,27 @@ mod tests {
                 eta_scale: 1.0 + rng.next_f32(),
             };
             lanes.set(i, &vertex);
+            // Two more lights, as in the every-light mode (some lanes without a sample).
+            for k in 1..3 {
+                let light = if (i + k) % 5 == 0 {
+                    LaneLight::None
+                } else {
+                    LaneLight::Sample(
+                        v(rng).normalize(),
+                        s(rng, 1.0),
+                        rng.next_f32() * 3.0,
+                        true,
+                        if k == 1 {
+                            Target::Point(Point3::ORIGIN + v(rng) * 3.0)
+                        } else {
+                            Target::Infinite
+                        },
+                    )
+                };
+                lanes.set_light(i, k, &light);
+            }
         }
+        lanes.extra = 2;
         lanes.lanes = 0xbfff;
         (lanes, quads)
     }
@@ -739,20 +906,38 @@ mod tests {
             let mut results = Vec::new();
             for &level in levels.iter().filter(|&&l| l <= supported) {
                 let (mut lanes, _quads) = random_lanes(&mut rng.clone());
-                let (mut next, mut shadows) = (RayBatch::default(), RayBatch::default());
-                let mut pending = [SampledSpectrum::ZERO; BATCH];
+                let mut next = RayBatch::default();
+                let mut shadows = [RayBatch::default(); MAX_SHADOWS];
+                let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
                 lanes.shade_at(level, &mut next, &mut shadows, &mut pending);
                 let bits =
                     |a: &[L]| -> Vec<u32> { a.iter().flat_map(|l| l.map(f32::to_bits)).collect() };
+                let lights: Vec<_> = (0..3)
+                    .map(|k| {
+                        let (l, sh) = (&lanes.lights[k], &shadows[k]);
+                        let shown = |a: &[L]| -> Vec<u32> {
+                            // Only the lanes with a shadow ray are outputs.
+                            a.iter()
+                                .flat_map(|x| {
+                                    crate::math::lanes(l.shadow).map(move |i| x[i].to_bits())
+                                })
+                                .collect()
+                        };
+                        (
+                            (l.shadow, sh.active),
+                            shown(&l.c),
+                            shown(&sh.o),
+                            shown(&sh.d),
+                            shown(&[sh.tmax]),
+                        )
+                    })
+                    .collect();
                 results.push((
-                    (lanes.shadow, lanes.alive, shadows.active),
-                    bits(&lanes.c),
+                    (lanes.alive, lights),
                     bits(&lanes.beta_out),
                     bits(&[lanes.pdf]),
                     bits(&next.o),
                     bits(&next.d),
-                    bits(&shadows.o),
-                    bits(&shadows.d),
                 ));
             }
             assert!(results.windows(2).all(|w| w[0] == w[1]));
@@ -760,11 +945,13 @@ mod tests {
                 results.len(),
                 levels.iter().filter(|&&l| l <= supported).count()
             );
-            let ((shadow, alive, rays), ..) = results[0];
+            let ((alive, lights), ..) = &results[0];
+            let (shadow, rays) = lights[0].0;
             assert!(shadow & !0xbfff == 0 && alive & !0xbfff == 0 && rays & !0xbfff == 0);
+            assert!(lights.iter().all(|l| l.0 .0 == l.0 .1));
             seen[0] += shadow.count_ones();
             seen[1] += alive.count_ones();
-            seen[2] += rays.count_ones();
+            seen[2] += lights[1].0 .0.count_ones() + lights[2].0 .0.count_ones();
             let _ = rng.next_u32();
         }
         // Every kind of outcome was compared.

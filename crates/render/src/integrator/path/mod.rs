@@ -195,9 +195,7 @@ impl Path {
         }
 
         let material = scene.material(&si);
-        if let (Some((lanes, lane)), Model::Diffuse { reflectance }, false) =
-            (defer, &material.model, every.is_some())
-        {
+        if let (Some((lanes, lane)), Model::Diffuse { reflectance }) = (defer, &material.model) {
             // A Lambert vertex, left to the batch's Lambert lanes once its numbers are drawn
             // (in the order the scalar vertex below draws them, the roulette's even where the
             // path could end before it: it then goes unused). What `Material::bsdf`,
@@ -210,7 +208,29 @@ impl Path {
             st.prev.p = si.p;
             st.prev.n = if cos_o < 0.0 { -frame.n } else { frame.n };
             st.prev.reflect_only = true;
-            let light = self.lane_light(scene, st, &st.prev, sampler);
+            let light = if every.is_some() {
+                // Every light, each sampled by itself with the same numbers (as below).
+                let u = sampler.next_2d();
+                for (k, light) in lights.iter().enumerate().skip(1) {
+                    let ls = light.sample_from(
+                        &scene.geometry,
+                        &scene.emissions,
+                        &st.prev,
+                        u,
+                        &st.lambda,
+                    );
+                    lanes.set_light(lane, k, &LaneLight::from(ls));
+                }
+                LaneLight::from(lights[0].sample_from(
+                    &scene.geometry,
+                    &scene.emissions,
+                    &st.prev,
+                    u,
+                    &st.lambda,
+                ))
+            } else {
+                self.lane_light(scene, st, &st.prev, sampler)
+            };
             sampler.skip_1d();
             let u2 = sampler.next_2d();
             let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
@@ -473,7 +493,11 @@ impl Integrator for Path {
         let mut shadows = [RayBatch::default(); MAX_SHADOWS];
         let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
         let every = every_light(scene);
+        let mut extra: Shadows = [None; MAX_SHADOWS];
         let mut lambert = LambertLanes::default();
+        if every {
+            lambert.extra = scene.lights.len() - 1;
+        }
         loop {
             if alive == 0 {
                 if next == n {
@@ -502,13 +526,15 @@ impl Integrator for Path {
                 sampler.resume(cursors[s]);
                 let lanes = Some((&mut lambert, i));
                 let o = if every {
-                    let mut extra = [None; MAX_SHADOWS];
                     let o =
                         self.vertex(scene, &mut st[i], hits[i], sampler, lanes, Some(&mut extra));
-                    for (k, shadow) in extra.into_iter().enumerate() {
-                        if let Some((ray, c)) = shadow {
-                            shadows[k].set(i, &ray);
-                            pending[k][i] = c;
+                    if o.is_some() {
+                        // (Taken, so that `extra` holds nothing for the next lane.)
+                        for (k, shadow) in extra[..scene.lights.len()].iter_mut().enumerate() {
+                            if let Some((ray, c)) = shadow.take() {
+                                shadows[k].set(i, &ray);
+                                pending[k][i] = c;
+                            }
                         }
                     }
                     o
@@ -528,7 +554,7 @@ impl Integrator for Path {
                 }
             }
             if lambert.lanes != 0 {
-                lambert.shade(&mut batch, &mut shadows[0], &mut pending[0]);
+                lambert.shade(&mut batch, &mut shadows, &mut pending);
                 for i in lanes(lambert.lanes) {
                     let o = lambert.finish(i);
                     let st = &mut st[i];
