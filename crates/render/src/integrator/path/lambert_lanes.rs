@@ -133,9 +133,10 @@ pub(super) struct LambertVertex<'a> {
 pub(super) enum LaneLight<'a> {
     /// No light to sample.
     None,
-    /// A light sample made by [`crate::light::Light::sample_from`]: direction, radiance, density
-    /// (the pick's probability included), whether the light is a delta light, shadow target.
-    Sample(Vec3, SampledSpectrum, f32, bool, Target),
+    /// The light samples are in already ([`LambertLanes::set_sample`]).
+    Given,
+    /// A light sample made by [`crate::light::Light::sample_from`], and the pick's probability.
+    Sample(LightSample, f32),
     /// A parallelogram light of uniform radiance, to sample here with the numbers `u` (the
     /// pick's probability `pick_pdf`).
     Rect {
@@ -152,17 +153,6 @@ pub(super) enum LaneLight<'a> {
         /// The pick's probability.
         pick_pdf: f32,
     },
-}
-
-impl From<Option<LightSample>> for LaneLight<'_> {
-    /// A sample made by the light itself (no pick: its density is the light's alone).
-    #[inline(always)]
-    fn from(ls: Option<LightSample>) -> Self {
-        match ls {
-            Some(ls) => LaneLight::Sample(ls.wi, ls.li, ls.pdf, ls.delta, ls.target),
-            None => LaneLight::None,
-        }
-    }
 }
 
 /// What [`LambertLanes::finish`] gives for a lane: the path's next throughput and direction
@@ -235,7 +225,7 @@ impl LambertLanes {
             self.u_light[0][i] = u[0];
             self.u_light[1][i] = u[1];
             self.pick_pdf[i] = pick_pdf;
-        } else {
+        } else if !matches!(v.light, LaneLight::Given) {
             self.set_light(i, 0, &v.light);
         }
         self.u2[0][i] = v.u2[0];
@@ -252,23 +242,40 @@ impl LambertLanes {
     /// parallelogram to sample here).
     #[inline(always)]
     pub(super) fn set_light(&mut self, i: usize, k: usize, light: &LaneLight) {
+        match light {
+            LaneLight::Sample(ls, pick_pdf) => self.set_sample(i, k, Some(ls), *pick_pdf),
+            _ => self.set_sample(i, k, None, 1.0),
+        }
+    }
+
+    /// Puts light sample `k` of lane `i` in: `ls`, a sample made by the light (its density
+    /// times `pick_pdf`), or none. (Read field by field where the light left it: a copy into
+    /// another value would be reloaded whole from pieces.)
+    #[inline(always)]
+    pub(super) fn set_sample(
+        &mut self,
+        i: usize,
+        k: usize,
+        ls: Option<&LightSample>,
+        pick_pdf: f32,
+    ) {
         let bit = 1u32 << i;
         let l = &mut self.lights[k];
         l.light &= !bit;
         l.delta &= !bit;
         l.to_surface &= !bit;
         l.to_point &= !bit;
-        if let LaneLight::Sample(wi, li, pdf, delta, target) = *light {
+        if let Some(ls) = ls {
             l.light |= bit;
-            if delta {
+            if ls.delta {
                 l.delta |= bit;
             }
-            set3(&mut l.wi, i, wi);
+            set3(&mut l.wi, i, ls.wi);
             for k in 0..4 {
-                l.li[k][i] = li.0[k];
+                l.li[k][i] = ls.li.0[k];
             }
-            l.pdf[i] = pdf;
-            match target {
+            l.pdf[i] = pick_pdf * ls.pdf;
+            match ls.target {
                 Target::Surface(q, n) => {
                     l.to_surface |= bit;
                     set3(&mut l.at, i, q.to_vec());
@@ -832,18 +839,21 @@ mod tests {
             let light = match i % 4 {
                 0 => LaneLight::None,
                 1 | 3 if i < 8 => LaneLight::Sample(
-                    v(rng).normalize(),
-                    s(rng, 1.0),
-                    rng.next_f32() * 3.0,
-                    rng.next_f32() < 0.5,
-                    match i % 3 {
-                        0 => Target::Point(Point3::ORIGIN + v(rng) * 3.0),
-                        1 => Target::Surface(
-                            Point3::ORIGIN + v(rng) * 3.0,
-                            v(rng).normalize().to_normal(),
-                        ),
-                        _ => Target::Infinite,
+                    LightSample {
+                        wi: v(rng).normalize(),
+                        li: s(rng, 1.0),
+                        pdf: rng.next_f32() * 3.0,
+                        delta: rng.next_f32() < 0.5,
+                        target: match i % 3 {
+                            0 => Target::Point(Point3::ORIGIN + v(rng) * 3.0),
+                            1 => Target::Surface(
+                                Point3::ORIGIN + v(rng) * 3.0,
+                                v(rng).normalize().to_normal(),
+                            ),
+                            _ => Target::Infinite,
+                        },
                     },
+                    rng.next_f32(),
                 ),
                 _ => LaneLight::Rect {
                     q,
@@ -873,22 +883,18 @@ mod tests {
             lanes.set(i, &vertex);
             // Two more lights, as in the every-light mode (some lanes without a sample).
             for k in 1..3 {
-                let light = if (i + k) % 5 == 0 {
-                    LaneLight::None
-                } else {
-                    LaneLight::Sample(
-                        v(rng).normalize(),
-                        s(rng, 1.0),
-                        rng.next_f32() * 3.0,
-                        true,
-                        if k == 1 {
-                            Target::Point(Point3::ORIGIN + v(rng) * 3.0)
-                        } else {
-                            Target::Infinite
-                        },
-                    )
-                };
-                lanes.set_light(i, k, &light);
+                let ls = ((i + k) % 5 != 0).then(|| LightSample {
+                    wi: v(rng).normalize(),
+                    li: s(rng, 1.0),
+                    pdf: rng.next_f32() * 3.0,
+                    delta: true,
+                    target: if k == 1 {
+                        Target::Point(Point3::ORIGIN + v(rng) * 3.0)
+                    } else {
+                        Target::Infinite
+                    },
+                });
+                lanes.set_sample(i, k, ls.as_ref(), 1.0);
             }
         }
         lanes.extra = 2;

@@ -211,7 +211,7 @@ impl Path {
             let light = if every.is_some() {
                 // Every light, each sampled by itself with the same numbers (as below).
                 let u = sampler.next_2d();
-                for (k, light) in lights.iter().enumerate().skip(1) {
+                for (k, light) in lights.iter().enumerate() {
                     let ls = light.sample_from(
                         &scene.geometry,
                         &scene.emissions,
@@ -219,15 +219,9 @@ impl Path {
                         u,
                         &st.lambda,
                     );
-                    lanes.set_light(lane, k, &LaneLight::from(ls));
+                    lanes.set_sample(lane, k, ls.as_ref(), 1.0);
                 }
-                LaneLight::from(lights[0].sample_from(
-                    &scene.geometry,
-                    &scene.emissions,
-                    &st.prev,
-                    u,
-                    &st.lambda,
-                ))
+                LaneLight::Given
             } else {
                 self.lane_light(scene, st, &st.prev, sampler)
             };
@@ -386,7 +380,7 @@ impl Path {
             }
         }
         match light.sample_from(&scene.geometry, &scene.emissions, sp, u, &st.lambda) {
-            Some(ls) => LaneLight::Sample(ls.wi, ls.li, pick_pdf * ls.pdf, ls.delta, ls.target),
+            Some(ls) => LaneLight::Sample(ls, pick_pdf),
             None => LaneLight::None,
         }
     }
