@@ -42,6 +42,8 @@
 
 mod batch;
 mod build;
+mod hybrid;
+mod lanes;
 mod layout;
 mod packet;
 mod traverse;
@@ -49,7 +51,7 @@ mod traverse;
 pub use batch::BatchHits;
 pub use layout::{BvhNode, Tri4};
 
-use batch::FlatPrim;
+use lanes::FlatPrim;
 
 use super::blocks::{Box4, Quad4, Sphere4};
 use crate::mem::HugeSlice;
