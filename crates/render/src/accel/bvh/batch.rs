@@ -5,9 +5,10 @@
 //! sixteen lanes wide ([`crate::simd::Wide`]: one AVX-512 register, two AVX or four SSE ones),
 //! by lane-exact copies of the shapes' scalar tests, so every lane gets the single-ray hit bit
 //! for bit. These primitives are kept in increasing id order ([`FlatPrim`]), so that a strict
-//! `t < best` is the single-ray rule "equal t goes to the smaller id". Other primitives of a
-//! small scene, and every ray of a deeper tree, go through the single-ray traversal, lane by
-//! lane.
+//! `t < best` is the single-ray rule "equal t goes to the smaller id" (the tests live in
+//! [`super::lanes`]). Other primitives of a small scene go through the single-ray leaf routines,
+//! lane by lane. In a deeper tree, each group of enough coherent rays goes down as a packet
+//! ([`super::packet`]) and the other rays one by one through the single-ray traversal.
 
 use super::lanes::{test, FlatPrim, Lanes};
 use super::layout::{Kind, Ref, COUNT_MASK, KIND_SHIFT};
@@ -78,14 +79,11 @@ impl Bvh {
     ) {
         *hits = [None; BATCH];
         if !self.is_flat() {
-            let groups = self.packets_for(level, rays, false);
+            let groups = self.packets_for(level, rays);
             for (c, lanes) in groups.iter() {
                 self.intersect_packet(level, geometry, rays, c, lanes, hits, stats);
             }
             let rest = rays.active & !groups.lanes();
-            if self.hybrid_for(level, rest, false) {
-                return self.intersect_hybrid(level, geometry, rays, rest, hits, stats);
-            }
             for i in crate::math::lanes(rest) {
                 hits[i] = self.intersect(geometry, &rays.ray(i), stats);
             }
@@ -142,15 +140,12 @@ impl Bvh {
         stats: &mut RayStats,
     ) -> u32 {
         if !self.is_flat() {
-            let groups = self.packets_for(level, rays, true);
+            let groups = self.packets_for(level, rays);
             let mut hit = 0;
             for (c, lanes) in groups.iter() {
                 hit |= self.occluded_packet(level, geometry, rays, c, lanes, stats);
             }
             let rest = rays.active & !groups.lanes();
-            if self.hybrid_for(level, rest, true) {
-                return hit | self.occluded_hybrid(level, geometry, rays, rest, stats);
-            }
             for i in crate::math::lanes(rest) {
                 if self.occluded(geometry, &rays.ray(i), stats) {
                     hit |= 1 << i;
@@ -194,31 +189,13 @@ impl Bvh {
     /// The groups of lanes of `rays` a deep tree traces as packets ([`super::packet`]): on
     /// sixteen-lane registers, the groups of enough coherent rays ([`Coherence::groups`]).
     #[inline]
-    fn packets_for(&self, level: SimdLevel, rays: &RayBatch, any: bool) -> Groups {
+    fn packets_for(&self, level: SimdLevel, rays: &RayBatch) -> Groups {
         let active = if self.root.meta != 0 || level.min(SimdLevel::supported()) < PACKET_LEVEL {
             0
         } else {
             rays.active
         };
-        let g = Coherence::groups(rays, active);
-        let mode = tune("PK_GROUPS", 3);
-        let bit = if any { 2 } else { 1 };
-        if mode & bit == 0 && g.lanes() != rays.active {
-            return Coherence::groups(rays, 0);
-        }
-        g
-    }
-}
-
-impl Bvh {
-    /// Whether a deep tree traces the incoherent lanes `rest` by the hybrid traversal
-    /// ([`super::hybrid`]).
-    #[inline]
-    fn hybrid_for(&self, level: SimdLevel, rest: u32, any: bool) -> bool {
-        let on = tune(if any { "PK_HYB_ANY" } else { "PK_HYB" }, 1) != 0;
-        on && self.root.meta == 0
-            && level.min(SimdLevel::supported()) >= PACKET_LEVEL
-            && rest.count_ones() > super::hybrid::threshold()
+        Coherence::groups(rays, active)
     }
 }
 
@@ -348,9 +325,9 @@ mod tests {
         let mut meshes = Vec::new();
         if mixed && n < 40 {
             // A box whose placement is projective: not batchable, tested ray by ray. Only in
-            // flat trees: its `t` is not a world distance (the projective map does not keep
-            // the ray's parameter), so a hit may lie outside its box and which hit a deep
-            // tree returns depends on the order of the visit, ray by ray or in packets.
+            // flat trees: its hits can lie before the entry of its bounding box (seen on a
+            // 300-primitive tree), so which hit a deep tree returns depends on the order of
+            // the visit, ray by ray or in packets.
             let mut m = Transform::translation(Vec3::new(0.5, 0.2, 0.1)).m;
             m.m[3][2] = 0.05;
             if let Some(t) = Transform::from_matrix(m) {
@@ -501,11 +478,6 @@ mod tests {
                     // only on AVX2 and wider).
                     let mut packet_hits = [None; BATCH];
                     let mut packet_occluded = 0;
-                    // And every active lane by the hybrid traversal, at every level.
-                    let mut hybrid_hits = [None; BATCH];
-                    bvh.intersect_hybrid(level, &g, &rays, rays.active, &mut hybrid_hits, &mut st);
-                    let hybrid_occluded =
-                        bvh.occluded_hybrid(level, &g, &rays, rays.active, &mut st);
                     for (c, lanes) in groups.iter() {
                         bvh.intersect_packet(level, &g, &rays, c, lanes, &mut packet_hits, &mut st);
                         packet_occluded |= bvh.occluded_packet(level, &g, &rays, c, lanes, &mut st);
@@ -520,8 +492,6 @@ mod tests {
                         let blocked = bvh.occluded(&g, &ray, &mut st);
                         assert_eq!(hits[i], single, "{n} prims, {level:?}, batch {k}, lane {i}");
                         assert_eq!(occluded >> i & 1 == 1, blocked, "{level:?} {k} {i}");
-                        assert_eq!(hybrid_hits[i], single, "hybrid {level:?}, {k}, lane {i}");
-                        assert_eq!(hybrid_occluded >> i & 1 == 1, blocked, "hybrid {k} {i}");
                         if groups.lanes() >> i & 1 == 1 {
                             assert_eq!(packet_hits[i], single, "{level:?}, batch {k}, lane {i}");
                             assert_eq!(packet_occluded >> i & 1 == 1, blocked);
@@ -540,34 +510,5 @@ mod tests {
                 "{n} primitives: {hits_seen} hits, {blocked_seen} blocked"
             );
         }
-    }
-}
-
-/// TEMPORARY tuning knob.
-pub(super) fn tune(name: &str, default: u32) -> u32 {
-    static V: std::sync::OnceLock<Vec<(String, u32)>> = std::sync::OnceLock::new();
-    let v = V.get_or_init(|| {
-        ["PK_GROUPS", "PK_HYB", "PK_T", "PK_HYB_ANY"]
-            .iter()
-            .map(|n| {
-                (
-                    n.to_string(),
-                    std::env::var(n)
-                        .ok()
-                        .and_then(|s| s.parse().ok())
-                        .unwrap_or(u32::MAX),
-                )
-            })
-            .collect()
-    });
-    let x = v
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|p| p.1)
-        .unwrap_or(u32::MAX);
-    if x == u32::MAX {
-        default
-    } else {
-        x
     }
 }

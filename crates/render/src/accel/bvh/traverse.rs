@@ -35,53 +35,6 @@ impl Bvh {
         q.best
     }
 
-    /// [`Bvh::intersect`] in the subtree `start` (an inner node or a leaf of this tree) only,
-    /// given the closest hit so far, `best` (and `ray.tmax` one ULP above it): the closer of
-    /// `best` and the subtree's closest hit, by the single-ray rule. Hybrid traversals
-    /// ([`super::hybrid`]) hand a lane over to it from a node down.
-    pub(super) fn intersect_from(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        start: Ref,
-        best: Option<Hit>,
-        stats: &mut RayStats,
-    ) -> Option<Hit> {
-        let mut q = ClosestQuery {
-            geometry,
-            ray: *ray,
-            tri: TriRay::new(ray, !self.tris.is_empty()),
-            block: BlockRay::new(ray),
-            best,
-            tests: 0,
-        };
-        let visited = self.traverse_subtree(start, ray, &mut q);
-        stats.nodes += visited;
-        stats.prim_tests += q.tests;
-        q.best
-    }
-
-    /// [`Bvh::occluded`] in the subtree `start` only.
-    pub(super) fn occluded_from(
-        &self,
-        geometry: &Geometry,
-        ray: &Ray,
-        start: Ref,
-        stats: &mut RayStats,
-    ) -> bool {
-        let mut q = AnyQuery {
-            geometry,
-            ray,
-            tri: TriRay::new(ray, !self.tris.is_empty()),
-            block: BlockRay::new(ray),
-            tests: 0,
-        };
-        let visited = self.traverse_subtree(start, ray, &mut q);
-        stats.nodes += visited & !FOUND;
-        stats.prim_tests += q.tests;
-        visited & FOUND != 0
-    }
-
     /// True when any primitive is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
         let mut q = AnyQuery {
@@ -235,16 +188,9 @@ impl Bvh {
             }
             return 0;
         }
-        self.traverse_subtree(cur, ray, q)
-    }
-
-    /// [`Bvh::traverse`] of the subtree `start` of a deep tree.
-    #[inline(always)]
-    fn traverse_subtree<Q: Query>(&self, start: Ref, ray: &Ray, q: &mut Q) -> u64 {
         STACK_SPACE.with(|space| match space.try_borrow_mut() {
             Ok(mut stack) => crate::simd::run(Traversal {
                 bvh: self,
-                start,
                 ray,
                 q,
                 stack: &mut stack,
@@ -252,7 +198,6 @@ impl Bvh {
             // Only reached if a leaf test traced rays through a BVH itself.
             Err(_) => crate::simd::run(Traversal {
                 bvh: self,
-                start,
                 ray,
                 q,
                 stack: &mut [(Ref::EMPTY, 0.0); STACK],
@@ -260,17 +205,16 @@ impl Bvh {
         })
     }
 
-    /// [`Bvh::traverse`] from `start` (the root, an inner node or a leaf), with a stack.
+    /// [`Bvh::traverse`] from an inner root, with a stack.
     #[inline(always)]
     fn traverse_from<Q: Query, I: Isa>(
         &self,
-        start: Ref,
         ray: &Ray,
         q: &mut Q,
         stack: &mut [(Ref, f32); STACK],
         isa: I,
     ) -> u64 {
-        let mut cur = start;
+        let mut cur = self.root;
         let rb = RayBox::new(ray, isa);
         let mut sp = 0usize;
         let mut visited = 0u64;
@@ -376,7 +320,6 @@ impl Bvh {
 /// A traversal from an inner root, as a kernel for [`crate::simd::run`].
 struct Traversal<'a, Q> {
     bvh: &'a Bvh,
-    start: Ref,
     ray: &'a Ray,
     q: &'a mut Q,
     stack: &'a mut [(Ref, f32); STACK],
@@ -387,8 +330,7 @@ impl<Q: Query> crate::simd::Kernel for Traversal<'_, Q> {
 
     #[inline(always)]
     fn run<I: Isa>(self, isa: I) -> u64 {
-        self.bvh
-            .traverse_from(self.start, self.ray, self.q, self.stack, isa)
+        self.bvh.traverse_from(self.ray, self.q, self.stack, isa)
     }
 }
 
