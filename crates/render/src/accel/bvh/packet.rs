@@ -29,7 +29,9 @@
 //! the kernels run and are tested at every width, SSE included). Incoherent rays stay one by
 //! one: a hybrid traversal (a packet at the top of the tree, per-lane near planes, each lane
 //! on its own below a node reached by at most a few lanes) measured 0.97–1.06× with 1.6% more
-//! instructions, as rays here visit about five nodes each and share little more than the root.
+//! instructions, as rays here visit about five nodes each and share little more than the root;
+//! ordering children by the smallest entry distance of their lanes and skipping popped entries
+//! beyond every lane's closest hit measured 1.03× (full depth) and 1.04× (`max_depth=1`).
 
 use super::lanes::{test, FlatPrim, Lanes};
 use super::layout::{
