@@ -110,6 +110,13 @@ impl Quad4 {
         b
     }
 
+    /// Lane `l`'s corner, v × w and dual edge vectors (as [`Parallelogram::lane_data`]).
+    #[inline(always)]
+    pub(crate) fn lane(&self, l: usize) -> ([f32; 3], [f32; 3], [f32; 3], [f32; 3]) {
+        let a = |x: &[[f32; 4]; 3]| [x[0][l], x[1][l], x[2][l]];
+        (a(&self.p), a(&self.n), a(&self.ds), a(&self.dt))
+    }
+
     /// [`Parallelogram::intersect`] on the four lanes.
     #[inline(always)]
     pub(crate) fn test(&self, r: &BlockRay, tmin: f32, tmax: f32) -> BlockHit {
@@ -142,6 +149,12 @@ impl Quad4 {
 /// The first three rows of an affine inverse placement, lane by lane.
 type Rows4 = [[[f32; 4]; 4]; 3];
 
+/// Lane `l`'s three rows.
+#[inline(always)]
+fn lane_rows(m: &Rows4, l: usize) -> [[f32; 4]; 3] {
+    std::array::from_fn(|r| std::array::from_fn(|c| m[r][c][l]))
+}
+
 fn rows_of(blocks: &mut Rows4, lane: usize, m: &[[f32; 4]; 4]) {
     for r in 0..3 {
         for c in 0..4 {
@@ -166,6 +179,12 @@ impl Sphere4 {
             rows_of(&mut inv, l, &s.world_from_object.inv.m);
         }
         Self { inv }
+    }
+
+    /// Lane `l`'s inverse placement (its first three rows).
+    #[inline(always)]
+    pub(crate) fn lane(&self, l: usize) -> [[f32; 4]; 3] {
+        lane_rows(&self.inv, l)
     }
 
     /// [`Sphere::intersect`] on the four lanes.
@@ -213,6 +232,12 @@ impl Box4 {
             rows_of(&mut inv, l, &c.world_from_object.inv.m);
         }
         Self { inv }
+    }
+
+    /// Lane `l`'s inverse placement (its first three rows).
+    #[inline(always)]
+    pub(crate) fn lane(&self, l: usize) -> [[f32; 4]; 3] {
+        lane_rows(&self.inv, l)
     }
 
     /// [`Cube::intersect`] on the four lanes.

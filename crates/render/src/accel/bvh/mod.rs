@@ -37,11 +37,14 @@
 //! as in the list. The sheared ray of the triangle test and the reciprocal direction are
 //! computed once per ray (and not at all for scenes without triangles).
 //!
-//! Batches of coherent rays (a pixel's camera rays) go down the tree together as one packet
-//! ([`packet`]), with the same hits as ray by ray.
+//! Batches of rays ([`batch`]): each group of coherent rays (a pixel's camera rays, its shadow
+//! rays towards a small light) goes down the tree together as one packet ([`packet`]), with the
+//! same hits as ray by ray; parallelograms, spheres and boxes are tested sixteen rays at a time
+//! by lane-exact tests ([`lanes`]).
 
 mod batch;
 mod build;
+mod lanes;
 mod layout;
 mod packet;
 mod traverse;
@@ -49,7 +52,7 @@ mod traverse;
 pub use batch::BatchHits;
 pub use layout::{BvhNode, Tri4};
 
-use batch::FlatPrim;
+use lanes::FlatPrim;
 
 use super::blocks::{Box4, Quad4, Sphere4};
 use crate::mem::HugeSlice;
