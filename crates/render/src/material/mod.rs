@@ -32,7 +32,7 @@ mod specular;
 
 pub use bsdf::{Bsdf, BsdfModel};
 pub use cook_torrance::CookTorrance;
-pub use dielectric::{Dispersion, REFERENCE_WAVELENGTH};
+pub use dielectric::{relative_eta, Dispersion, REFERENCE_WAVELENGTH};
 pub use local_model::Whitted;
 pub use microfacet::{Distribution, Microfacet};
 pub use phong::{Lobe, PhongBrdf};

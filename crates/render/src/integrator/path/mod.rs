@@ -9,12 +9,13 @@
 //! (The course's branching estimator is [`super::CoursePath`].)
 
 mod lambert_lanes;
+mod specular_lanes;
 
 use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
-use crate::material::Model;
+use crate::material::{relative_eta, Model};
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -22,6 +23,7 @@ use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 use lambert_lanes::{LambertLanes, LambertVertex, LaneLight};
+use specular_lanes::{DeltaBsdf, SpecularLanes, SpecularVertex};
 
 /// The unidirectional path tracer with next-event estimation and MIS.
 #[derive(Clone, Copy, Debug)]
@@ -127,9 +129,11 @@ impl Path {
     /// found there, samples a light (the shadow ray is the caller's to test), samples the
     /// next direction and plays Russian roulette.
     ///
-    /// With `defer` (the batch's Lambert lanes and this path's lane), a vertex at a Lambert
-    /// surface stops once it has drawn its numbers and sampled a light, and leaves the rest to
-    /// [`LambertLanes::shade`]: it then returns `None`.
+    /// With `defer` (the batch's Lambert and delta lanes and this path's lane), a vertex at a
+    /// Lambert surface stops once it has drawn its numbers and sampled a light, and leaves the
+    /// rest to [`LambertLanes::shade`]; a vertex at a perfect mirror or a smooth dielectric
+    /// stops once it has drawn its numbers, and leaves the rest to [`SpecularLanes::shade`]:
+    /// it then returns `None`.
     #[inline(always)]
     fn vertex(
         &self,
@@ -137,7 +141,7 @@ impl Path {
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-        defer: Option<(&mut LambertLanes, usize)>,
+        defer: Option<(&mut LambertLanes, &mut SpecularLanes, usize)>,
         every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
@@ -195,8 +199,12 @@ impl Path {
         }
 
         let material = scene.material(&si);
-        if let (Some((lanes, lane)), Model::Diffuse { reflectance }, false) =
-            (defer, &material.model, every.is_some())
+        let (lambert, delta, lane) = match defer {
+            Some((lambert, delta, lane)) => (Some(lambert), Some(delta), lane),
+            None => (None, None, 0),
+        };
+        if let (Some(lanes), Model::Diffuse { reflectance }, false) =
+            (lambert, &material.model, every.is_some())
         {
             // A Lambert vertex, left to the batch's Lambert lanes once its numbers are drawn
             // (in the order the scalar vertex below draws them, the roulette's even where the
@@ -235,6 +243,67 @@ impl Path {
                 },
             );
             return None;
+        }
+        if let Some(lanes) = delta {
+            // A perfect mirror or a smooth dielectric, left to the batch's delta lanes once
+            // its numbers are drawn (as the scalar vertex below draws them: no light sample,
+            // the BSDF's three numbers (only a glass reads the first), the roulette's even
+            // where the path could end before it). What `Material::bsdf` resolves, in its
+            // order (a dispersive glass on a spectral path keeps only its hero wavelength).
+            // The shading point is not kept: after a delta vertex (`prev_delta`) nothing reads
+            // it before the next vertex sets it.
+            let refl = |t: &crate::texture::Texture, w: &Wavelengths| {
+                t.spectral(si.uv, w, crate::spectrum::RgbRole::Reflectance)
+            };
+            let bsdf = match &material.model {
+                Model::Specular { reflectance }
+                | Model::Conductor {
+                    eta_k: None,
+                    reflectance,
+                    mf: None,
+                } => Some(DeltaBsdf::Mirror {
+                    r: refl(reflectance, &st.lambda),
+                    two_sided: material.two_sided,
+                }),
+                Model::Dielectric {
+                    eta,
+                    dispersion,
+                    reflectance,
+                    transmittance,
+                    mf: None,
+                } => {
+                    let (r, t) = (
+                        refl(reflectance, &st.lambda),
+                        refl(transmittance, &st.lambda),
+                    );
+                    let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
+                    Some(DeltaBsdf::Glass { eta, r, t })
+                }
+                _ => None,
+            };
+            if let Some(bsdf) = bsdf {
+                let u = sampler.next_1d();
+                sampler.skip_1d();
+                sampler.skip_1d();
+                let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
+                st.prev_delta = true;
+                st.depth += 1;
+                lanes.set(
+                    lane,
+                    &SpecularVertex {
+                        p: si.p,
+                        ng: si.n,
+                        frame: si.shading_frame(),
+                        wo: si.wo,
+                        bsdf,
+                        beta: st.beta,
+                        u,
+                        u_rr,
+                        eta_scale: st.eta_scale,
+                    },
+                );
+                return None;
+            }
         }
         let bsdf = material.bsdf(si.shading_frame(), si.uv, &mut st.lambda);
         // The outgoing direction in the shading frame, shared by every BSDF query below.
@@ -474,6 +543,7 @@ impl Integrator for Path {
         let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
         let every = every_light(scene);
         let mut lambert = LambertLanes::default();
+        let mut specular = SpecularLanes::default();
         loop {
             if alive == 0 {
                 if next == n {
@@ -497,10 +567,11 @@ impl Integrator for Path {
             }
             let mut ended = 0u32;
             lambert.lanes = 0;
+            specular.lanes = 0;
             for i in lanes(alive) {
                 let s = slot[i];
                 sampler.resume(cursors[s]);
-                let lanes = Some((&mut lambert, i));
+                let lanes = Some((&mut lambert, &mut specular, i));
                 let o = if every {
                     let mut extra = [None; MAX_SHADOWS];
                     let o =
@@ -536,6 +607,22 @@ impl Integrator for Path {
                         Some((beta, pdf)) => {
                             st.beta = beta;
                             st.prev_pdf = pdf;
+                            st.ray = batch.ray(i);
+                        }
+                        None => ended |= 1 << i,
+                    }
+                }
+            }
+            if specular.lanes != 0 {
+                specular.shade(&mut batch);
+                for i in lanes(specular.lanes) {
+                    let o = specular.finish(i);
+                    let st = &mut st[i];
+                    match o.next {
+                        Some((beta, pdf, eta_scale)) => {
+                            st.beta = beta;
+                            st.prev_pdf = pdf;
+                            st.eta_scale = eta_scale;
                             st.ray = batch.ray(i);
                         }
                         None => ended |= 1 << i,
