@@ -97,6 +97,50 @@ impl PathState {
     }
 }
 
+/// Shades the delta lanes of a batch step ([`SpecularLanes::shade`], their next rays into
+/// `batch`) and hands each path its outcome: gives the lanes whose path ends.
+#[inline(always)]
+fn finish_delta(
+    specular: &mut SpecularLanes,
+    batch: &mut RayBatch,
+    st: &mut [PathState; BATCH],
+) -> u32 {
+    let mut ended = 0;
+    specular.shade(batch);
+    for i in lanes(specular.lanes) {
+        let st = &mut st[i];
+        match specular.finish(i).next {
+            Some((beta, pdf, eta_scale)) => {
+                st.beta = beta;
+                st.prev_pdf = pdf;
+                st.eta_scale = eta_scale;
+                st.ray = batch.ray(i);
+            }
+            None => ended |= 1 << i,
+        }
+    }
+    ended
+}
+
+/// True when a material of the scene is one the batch's delta lanes finish (a perfect mirror
+/// or a smooth dielectric), looked for among its first 256 materials: the lanes only save
+/// time (the scalar vertex gives the same bits), and this is asked once per batch.
+#[inline]
+fn has_delta_lanes(scene: &Scene) -> bool {
+    scene.materials.iter().take(256).any(|m| {
+        matches!(
+            m.model,
+            Model::Specular { .. }
+                | Model::Conductor {
+                    eta_k: None,
+                    mf: None,
+                    ..
+                }
+                | Model::Dielectric { mf: None, .. }
+        )
+    })
+}
+
 /// The most lights a vertex samples all of (see [`every_light`]).
 const MAX_SHADOWS: usize = 8;
 
@@ -129,7 +173,8 @@ impl Path {
     /// found there, samples a light (the shadow ray is the caller's to test), samples the
     /// next direction and plays Russian roulette.
     ///
-    /// With `defer` (the batch's Lambert and delta lanes and this path's lane), a vertex at a
+    /// With `defer` (the batch's Lambert and delta lanes, the latter made at the first delta
+    /// vertex, and this path's lane), a vertex at a
     /// Lambert surface stops once it has drawn its numbers and sampled a light, and leaves the
     /// rest to [`LambertLanes::shade`]; a vertex at a perfect mirror or a smooth dielectric
     /// stops once it has drawn its numbers, and leaves the rest to [`SpecularLanes::shade`]:
@@ -141,7 +186,7 @@ impl Path {
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-        defer: Option<(&mut LambertLanes, &mut SpecularLanes, usize)>,
+        defer: Option<(&mut LambertLanes, Option<&mut Option<SpecularLanes>>, usize)>,
         every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
@@ -200,7 +245,7 @@ impl Path {
 
         let material = scene.material(&si);
         let (lambert, delta, lane) = match defer {
-            Some((lambert, delta, lane)) => (Some(lambert), Some(delta), lane),
+            Some((lambert, delta, lane)) => (Some(lambert), delta, lane),
             None => (None, None, 0),
         };
         if let (Some(lanes), Model::Diffuse { reflectance }, false) =
@@ -244,64 +289,8 @@ impl Path {
             );
             return None;
         }
-        if let Some(lanes) = delta {
-            // A perfect mirror or a smooth dielectric, left to the batch's delta lanes once
-            // its numbers are drawn (as the scalar vertex below draws them: no light sample,
-            // the BSDF's three numbers (only a glass reads the first), the roulette's even
-            // where the path could end before it). What `Material::bsdf` resolves, in its
-            // order (a dispersive glass on a spectral path keeps only its hero wavelength).
-            // The shading point is not kept: after a delta vertex (`prev_delta`) nothing reads
-            // it before the next vertex sets it.
-            let refl = |t: &crate::texture::Texture, w: &Wavelengths| {
-                t.spectral(si.uv, w, crate::spectrum::RgbRole::Reflectance)
-            };
-            let bsdf = match &material.model {
-                Model::Specular { reflectance }
-                | Model::Conductor {
-                    eta_k: None,
-                    reflectance,
-                    mf: None,
-                } => Some(DeltaBsdf::Mirror {
-                    r: refl(reflectance, &st.lambda),
-                    two_sided: material.two_sided,
-                }),
-                Model::Dielectric {
-                    eta,
-                    dispersion,
-                    reflectance,
-                    transmittance,
-                    mf: None,
-                } => {
-                    let (r, t) = (
-                        refl(reflectance, &st.lambda),
-                        refl(transmittance, &st.lambda),
-                    );
-                    let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
-                    Some(DeltaBsdf::Glass { eta, r, t })
-                }
-                _ => None,
-            };
-            if let Some(bsdf) = bsdf {
-                let u = sampler.next_1d();
-                sampler.skip_1d();
-                sampler.skip_1d();
-                let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
-                st.prev_delta = true;
-                st.depth += 1;
-                lanes.set(
-                    lane,
-                    &SpecularVertex {
-                        p: si.p,
-                        ng: si.n,
-                        frame: si.shading_frame(),
-                        wo: si.wo,
-                        bsdf,
-                        beta: st.beta,
-                        u,
-                        u_rr,
-                        eta_scale: st.eta_scale,
-                    },
-                );
+        if let Some(delta) = delta {
+            if self.defer_delta(st, &si, material, sampler, delta, lane) {
                 return None;
             }
         }
@@ -400,6 +389,82 @@ impl Path {
             shadow,
             alive: true,
         })
+    }
+
+    /// The start of a vertex at a perfect mirror or a smooth dielectric, whose end is left to
+    /// the batch's delta lanes (`lanes`, made here at the first such vertex; this path is in
+    /// lane `lane`): true when the vertex was one.
+    #[inline(always)]
+    fn defer_delta(
+        &self,
+        st: &mut PathState,
+        si: &crate::interaction::SurfaceInteraction,
+        material: &crate::material::Material,
+        sampler: &mut Sampler,
+        lanes: &mut Option<SpecularLanes>,
+        lane: usize,
+    ) -> bool {
+        // A perfect mirror or a smooth dielectric, left to the batch's delta lanes once
+        // its numbers are drawn (as the scalar `Path::vertex` draws them: no light sample,
+        // the BSDF's three numbers (only a glass reads the first), the roulette's even
+        // where the path could end before it). What `Material::bsdf` resolves, in its
+        // order (a dispersive glass on a spectral path keeps only its hero wavelength).
+        // The shading point is not kept: after a delta vertex (`prev_delta`) nothing reads
+        // it before the next vertex sets it.
+        let refl = |t: &crate::texture::Texture, w: &Wavelengths| {
+            t.spectral(si.uv, w, crate::spectrum::RgbRole::Reflectance)
+        };
+        let bsdf = match &material.model {
+            Model::Specular { reflectance }
+            | Model::Conductor {
+                eta_k: None,
+                reflectance,
+                mf: None,
+            } => Some(DeltaBsdf::Mirror {
+                r: refl(reflectance, &st.lambda),
+                two_sided: material.two_sided,
+            }),
+            Model::Dielectric {
+                eta,
+                dispersion,
+                reflectance,
+                transmittance,
+                mf: None,
+            } => {
+                let (r, t) = (
+                    refl(reflectance, &st.lambda),
+                    refl(transmittance, &st.lambda),
+                );
+                let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
+                Some(DeltaBsdf::Glass { eta, r, t })
+            }
+            _ => None,
+        };
+        if let Some(bsdf) = bsdf {
+            let lanes = lanes.get_or_insert_with(SpecularLanes::default);
+            let u = sampler.next_1d();
+            sampler.skip_1d();
+            sampler.skip_1d();
+            let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
+            st.prev_delta = true;
+            st.depth += 1;
+            lanes.set(
+                lane,
+                &SpecularVertex {
+                    p: si.p,
+                    ng: si.n,
+                    frame: si.shading_frame(),
+                    wo: si.wo,
+                    bsdf,
+                    beta: st.beta,
+                    u,
+                    u_rr,
+                    eta_scale: st.eta_scale,
+                },
+            );
+            return true;
+        }
+        false
     }
 
     /// [`Path::sample_light`] for a Lambert lane: a parallelogram light of uniform radiance is
@@ -504,6 +569,23 @@ impl Integrator for Path {
         }
     }
 
+    fn radiance_batch(
+        &self,
+        scene: &Scene,
+        batch: SampleBatch<'_>,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        out: &mut [SampledSpectrum],
+    ) {
+        if has_delta_lanes(scene) {
+            self.trace_batch::<true>(scene, batch, sampler, stats, out);
+        } else {
+            self.trace_batch::<false>(scene, batch, sampler, stats, out);
+        }
+    }
+}
+
+impl Path {
     /// [`BATCH`] paths side by side: their rays are traced together (small scenes test each
     /// primitive against all of them at once), their vertices shaded one by one, each drawing
     /// from its own sample's cursor. Where a batch costs the same however few of its lanes are
@@ -511,7 +593,12 @@ impl Integrator for Path {
     /// sample at once; otherwise the samples go sixteen at a time, so that camera rays start
     /// together (and large scenes trace them as packets). Every path gets the radiance
     /// [`Integrator::radiance`] gives it alone, bit for bit, whatever lane it runs in.
-    fn radiance_batch(
+    ///
+    /// With `DELTA`, the perfect-mirror and smooth-glass vertices are finished by the batch's
+    /// delta lanes ([`SpecularLanes`]); without, the loop is compiled without them (for scenes
+    /// that have no such surface: carried along, they lengthened its code).
+    #[inline(never)]
+    fn trace_batch<const DELTA: bool>(
         &self,
         scene: &Scene,
         batch: SampleBatch<'_>,
@@ -543,7 +630,8 @@ impl Integrator for Path {
         let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
         let every = every_light(scene);
         let mut lambert = LambertLanes::default();
-        let mut specular = SpecularLanes::default();
+        // Made at the first delta vertex (most scenes have none; zeroing it costs).
+        let mut specular: Option<SpecularLanes> = None;
         loop {
             if alive == 0 {
                 if next == n {
@@ -567,11 +655,14 @@ impl Integrator for Path {
             }
             let mut ended = 0u32;
             lambert.lanes = 0;
-            specular.lanes = 0;
+            if let (true, Some(specular)) = (DELTA, &mut specular) {
+                specular.lanes = 0;
+            }
             for i in lanes(alive) {
                 let s = slot[i];
                 sampler.resume(cursors[s]);
-                let lanes = Some((&mut lambert, &mut specular, i));
+                let delta = if DELTA { Some(&mut specular) } else { None };
+                let lanes = Some((&mut lambert, delta, i));
                 let o = if every {
                     let mut extra = [None; MAX_SHADOWS];
                     let o =
@@ -613,20 +704,9 @@ impl Integrator for Path {
                     }
                 }
             }
-            if specular.lanes != 0 {
-                specular.shade(&mut batch);
-                for i in lanes(specular.lanes) {
-                    let o = specular.finish(i);
-                    let st = &mut st[i];
-                    match o.next {
-                        Some((beta, pdf, eta_scale)) => {
-                            st.beta = beta;
-                            st.prev_pdf = pdf;
-                            st.eta_scale = eta_scale;
-                            st.ray = batch.ray(i);
-                        }
-                        None => ended |= 1 << i,
-                    }
+            if let (true, Some(specular)) = (DELTA, &mut specular) {
+                if specular.lanes != 0 {
+                    ended |= finish_delta(specular, &mut batch, &mut st);
                 }
             }
             for (shadows, pending) in shadows.iter().zip(&pending) {
