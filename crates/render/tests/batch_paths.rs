@@ -138,14 +138,14 @@ fn mixed_scene(spectral: bool) -> Scene {
     scene
 }
 
-/// The Cornell box with spheres of every delta surface the batch's delta lanes shade and
-/// of the nearby ones that stay scalar: a one-sided perfect mirror (Mitsuba's conductor
-/// without an index), a two-sided tinted mirror, glass (η = 1.5), glass seen from inside
-/// (the camera's rays start in it: total internal reflection), an index-matched glass
-/// (η = 1), a two-sided mirror rectangle, a dispersive glass (in spectral mode it keeps only the hero wavelength), a glass
-/// with a checkered transmittance, and, shaded by the scalar vertex, a rough glass and a gold
-/// conductor. `every` lights it by three point lights instead of its ceiling light (every
-/// vertex samples every light).
+/// The Cornell box with every delta surface `Path::delta_vertex` shades in a batch, and
+/// nearby ones the general vertex shades: spheres of a one-sided perfect mirror (Mitsuba's
+/// conductor without an index), a two-sided tinted mirror, glass (η = 1.5), an index-matched
+/// glass (η = 1), a dispersive glass (in spectral mode it keeps only the hero wavelength), a
+/// glass with a checkered transmittance, a rough glass and a gold conductor (both general); a
+/// two-sided mirror rectangle seen from both sides; and a glass sphere around the camera (its
+/// rays start inside: total internal reflection). `every` lights it by three point lights
+/// instead of its ceiling light (every vertex samples every light).
 fn delta_scene(spectral: bool, every: bool) -> Scene {
     let base = support::radiosity::cornell(AccelKind::Bvh);
     let mut b = SceneBuilder::new();

@@ -43,9 +43,6 @@ pub fn relative_eta(eta: f32, dispersion: Option<&Dispersion>, w: &mut Wavelengt
 }
 
 /// Samples the smooth interface: reflection with probability F, else refraction.
-///
-/// The path tracer's delta lanes repeat it on sixteen lanes
-/// (`integrator/path/specular_lanes.rs`): a change here must be made there too.
 #[inline]
 pub fn sample_smooth(
     eta: f32,

@@ -10,9 +10,6 @@ use crate::spectrum::SampledSpectrum;
 /// Returns `(F, cos_t, eta_it, eta_ti)`: the reflectance, the signed cosine of the transmitted
 /// direction (0 under total internal reflection), and the relative indices along the direction
 /// of travel (transmitted over incident, and its inverse).
-///
-/// The path tracer's delta lanes repeat it on sixteen lanes
-/// (`integrator/path/specular_lanes.rs`): a change here must be made there too.
 #[inline]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
     let outside = cos_i >= 0.0;

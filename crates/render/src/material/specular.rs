@@ -11,9 +11,6 @@ use crate::spectrum::SampledSpectrum;
 
 /// Samples the mirror direction; the weight is `r` times the conductor's Fresnel reflectance
 /// (none for a perfect mirror).
-///
-/// The path tracer's delta lanes repeat the perfect mirror on sixteen lanes
-/// (`integrator/path/specular_lanes.rs`): a change here must be made there too.
 #[inline]
 pub fn sample(
     r: SampledSpectrum,

@@ -591,19 +591,19 @@ impl WideKernel for Shade<'_> {
 
 /// `!(a <= 0)` in the lanes of `all`: the scalar code's tests, NaN included.
 #[inline(always)]
-pub(super) fn positive<W: Wide>(w: W, all: W::M, a: W::V) -> W::M {
+fn positive<W: Wide>(w: W, all: W::M, a: W::V) -> W::M {
     w.and_not(all, w.le(a, w.splat(0.0)))
 }
 
 /// Neither NaN nor infinite.
 #[inline(always)]
-pub(super) fn finite<W: Wide>(w: W, a: W::V) -> W::M {
+fn finite<W: Wide>(w: W, a: W::V) -> W::M {
     w.eq(w.sub(a, a), w.splat(0.0))
 }
 
 /// `a·b` as `Vec3::dot` sums it.
 #[inline(always)]
-pub(super) fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
+fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
     w.add(
         w.add(w.mul(a[0], b[0]), w.mul(a[1], b[1])),
         w.mul(a[2], b[2]),
@@ -612,20 +612,20 @@ pub(super) fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
 
 /// `f32::max` for operands that are not NaN.
 #[inline(always)]
-pub(super) fn max<W: Wide>(w: W, a: W::V, b: W::V) -> W::V {
+fn max<W: Wide>(w: W, a: W::V, b: W::V) -> W::V {
     w.select(w.lt(a, b), b, a)
 }
 
 /// `v` into the lanes `m` of `a`.
 #[inline(always)]
-pub(super) fn put<W: Wide>(w: W, m: W::M, v: W::V, a: &mut L) {
+fn put<W: Wide>(w: W, m: W::M, v: W::V, a: &mut L) {
     w.store(w.select(m, v, w.load(a)), a);
 }
 
 /// The origin `p` (unit geometric normal `n`) moved off its surface towards the side `d`
 /// points to, as `Ray::spawn_unit` moves it.
 #[inline(always)]
-pub(super) fn offset<W: Wide>(w: W, p: [W::V; 3], n: [W::V; 3], d: [W::V; 3]) -> [W::V; 3] {
+fn offset<W: Wide>(w: W, p: [W::V; 3], n: [W::V; 3], d: [W::V; 3]) -> [W::V; 3] {
     let away = w.lt(dot(w, n, d), w.splat(0.0));
     let mut o = p;
     for k in 0..3 {

@@ -9,13 +9,12 @@
 //! (The course's branching estimator is [`super::CoursePath`].)
 
 mod lambert_lanes;
-mod specular_lanes;
 
 use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
-use crate::material::{relative_eta, Model};
+use crate::material::{relative_eta, sample_smooth, sample_specular, Model};
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -23,7 +22,6 @@ use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
 use lambert_lanes::{LambertLanes, LambertVertex, LaneLight};
-use specular_lanes::{DeltaBsdf, SpecularLanes, SpecularVertex};
 
 /// The unidirectional path tracer with next-event estimation and MIS.
 #[derive(Clone, Copy, Debug)]
@@ -97,36 +95,11 @@ impl PathState {
     }
 }
 
-/// Shades the delta lanes of a batch step ([`SpecularLanes::shade`], their next rays into
-/// `batch`) and hands each path its outcome: gives the lanes whose path ends.
-#[inline(always)]
-fn finish_delta(
-    specular: &mut SpecularLanes,
-    batch: &mut RayBatch,
-    st: &mut [PathState; BATCH],
-) -> u32 {
-    let mut ended = 0;
-    specular.shade(batch);
-    for i in lanes(specular.lanes) {
-        let st = &mut st[i];
-        match specular.finish(i).next {
-            Some((beta, pdf, eta_scale)) => {
-                st.beta = beta;
-                st.prev_pdf = pdf;
-                st.eta_scale = eta_scale;
-                st.ray = batch.ray(i);
-            }
-            None => ended |= 1 << i,
-        }
-    }
-    ended
-}
-
-/// True when a material of the scene is one the batch's delta lanes finish (a perfect mirror
-/// or a smooth dielectric), looked for among its first 256 materials: the lanes only save
-/// time (the scalar vertex gives the same bits), and this is asked once per batch.
+/// True when a material of the scene is one [`Path::delta_vertex`] shades (a perfect mirror
+/// or a smooth dielectric), looked for among its first 256 materials: that path only saves
+/// time (the general vertex gives the same bits), and this is asked once per batch.
 #[inline]
-fn has_delta_lanes(scene: &Scene) -> bool {
+fn has_delta_surfaces(scene: &Scene) -> bool {
     scene.materials.iter().take(256).any(|m| {
         matches!(
             m.model,
@@ -173,12 +146,11 @@ impl Path {
     /// found there, samples a light (the shadow ray is the caller's to test), samples the
     /// next direction and plays Russian roulette.
     ///
-    /// With `defer` (the batch's Lambert and delta lanes, the latter made at the first delta
-    /// vertex, and this path's lane), a vertex at a
-    /// Lambert surface stops once it has drawn its numbers and sampled a light, and leaves the
-    /// rest to [`LambertLanes::shade`]; a vertex at a perfect mirror or a smooth dielectric
-    /// stops once it has drawn its numbers, and leaves the rest to [`SpecularLanes::shade`]:
-    /// it then returns `None`.
+    /// With `defer` (the batch's Lambert lanes, whether to take [`Path::delta_vertex`], and
+    /// this path's lane), a vertex at a Lambert surface stops once it has drawn its numbers and
+    /// sampled a light, and leaves the rest to [`LambertLanes::shade`]: it then returns `None`;
+    /// a vertex at a perfect mirror or a smooth dielectric is shaded by
+    /// [`Path::delta_vertex`].
     #[inline(always)]
     fn vertex(
         &self,
@@ -186,7 +158,7 @@ impl Path {
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-        defer: Option<(&mut LambertLanes, Option<&mut Option<SpecularLanes>>, usize)>,
+        defer: Option<(&mut LambertLanes, bool, usize)>,
         every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
@@ -246,7 +218,7 @@ impl Path {
         let material = scene.material(&si);
         let (lambert, delta, lane) = match defer {
             Some((lambert, delta, lane)) => (Some(lambert), delta, lane),
-            None => (None, None, 0),
+            None => (None, false, 0),
         };
         if let (Some(lanes), Model::Diffuse { reflectance }, false) =
             (lambert, &material.model, every.is_some())
@@ -289,9 +261,12 @@ impl Path {
             );
             return None;
         }
-        if let Some(delta) = delta {
-            if self.defer_delta(st, &si, material, sampler, delta, lane) {
-                return None;
+        if delta {
+            if let Some(alive) = self.delta_vertex(st, &si, material, sampler) {
+                return Some(VertexOutcome {
+                    shadow: None,
+                    alive,
+                });
             }
         }
         let bsdf = material.bsdf(si.shading_frame(), si.uv, &mut st.lambda);
@@ -391,39 +366,47 @@ impl Path {
         })
     }
 
-    /// The start of a vertex at a perfect mirror or a smooth dielectric, whose end is left to
-    /// the batch's delta lanes (`lanes`, made here at the first such vertex; this path is in
-    /// lane `lane`): true when the vertex was one.
+    /// The rest of a vertex at a perfect mirror (`specular`, or a conductor without an index)
+    /// or a smooth dielectric, the emission found there added (`None`: the material is neither):
+    /// what the general vertex below does for it — `Material::bsdf`, `Bsdf::local_wo`, the
+    /// model's sample with the numbers drawn as there, `Bsdf::world_sample`, the throughput,
+    /// Πη², the next ray and Russian roulette — with the same operations in the same order,
+    /// without building the BSDF (an out-of-line call returning a large value, another for
+    /// the sample), without the light sampling a delta BSDF skips, and without the shading
+    /// point, unread after a delta vertex (`prev_delta`: the next vertex makes its own before
+    /// reading it). Gives whether the path goes on.
     #[inline(always)]
-    fn defer_delta(
+    fn delta_vertex(
         &self,
         st: &mut PathState,
         si: &crate::interaction::SurfaceInteraction,
         material: &crate::material::Material,
         sampler: &mut Sampler,
-        lanes: &mut Option<SpecularLanes>,
-        lane: usize,
-    ) -> bool {
-        // A perfect mirror or a smooth dielectric, left to the batch's delta lanes once
-        // its numbers are drawn (as the scalar `Path::vertex` draws them: no light sample,
-        // the BSDF's three numbers (only a glass reads the first), the roulette's even
-        // where the path could end before it). What `Material::bsdf` resolves, in its
-        // order (a dispersive glass on a spectral path keeps only its hero wavelength).
-        // The shading point is not kept: after a delta vertex (`prev_delta`) nothing reads
-        // it before the next vertex sets it.
+    ) -> Option<bool> {
         let refl = |t: &crate::texture::Texture, w: &Wavelengths| {
             t.spectral(si.uv, w, crate::spectrum::RgbRole::Reflectance)
         };
-        let bsdf = match &material.model {
+        let frame = si.shading_frame();
+        let (s, flip) = match &material.model {
             Model::Specular { reflectance }
             | Model::Conductor {
                 eta_k: None,
                 reflectance,
                 mf: None,
-            } => Some(DeltaBsdf::Mirror {
-                r: refl(reflectance, &st.lambda),
-                two_sided: material.two_sided,
-            }),
+            } => {
+                let r = refl(reflectance, &st.lambda);
+                // `Bsdf::local_wo`, two-sided as the material says.
+                let mut o = frame.to_local(si.wo);
+                let flip = material.two_sided && o.z < 0.0;
+                if flip {
+                    o.z = -o.z;
+                }
+                // The BSDF's numbers, unread by a mirror.
+                sampler.skip_1d();
+                sampler.skip_1d();
+                sampler.skip_1d();
+                (sample_specular(r, None, o), flip)
+            }
             Model::Dielectric {
                 eta,
                 dispersion,
@@ -435,36 +418,47 @@ impl Path {
                     refl(reflectance, &st.lambda),
                     refl(transmittance, &st.lambda),
                 );
+                // A dispersive glass on a spectral path keeps only its hero wavelength.
                 let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
-                Some(DeltaBsdf::Glass { eta, r, t })
+                // A dielectric is never two-sided.
+                let o = frame.to_local(si.wo);
+                let u = sampler.next_1d();
+                sampler.skip_1d();
+                sampler.skip_1d();
+                (sample_smooth(eta, r, t, o, u), false)
             }
-            _ => None,
+            _ => return None,
         };
-        if let Some(bsdf) = bsdf {
-            let lanes = lanes.get_or_insert_with(SpecularLanes::default);
-            let u = sampler.next_1d();
-            sampler.skip_1d();
-            sampler.skip_1d();
-            let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
-            st.prev_delta = true;
-            st.depth += 1;
-            lanes.set(
-                lane,
-                &SpecularVertex {
-                    p: si.p,
-                    ng: si.n,
-                    frame: si.shading_frame(),
-                    wo: si.wo,
-                    bsdf,
-                    beta: st.beta,
-                    u,
-                    u_rr,
-                    eta_scale: st.eta_scale,
-                },
-            );
-            return true;
+        let Some(s) = s else {
+            return Some(false);
+        };
+        // `Bsdf::world_sample`: mirrored back, into the world, finite.
+        let mut wi = s.wi;
+        if flip {
+            wi.z = -wi.z;
         }
-        false
+        let wi = frame.to_world(wi);
+        if !(s.weight.is_finite() && wi.is_finite()) {
+            return Some(false);
+        }
+        st.beta *= s.weight;
+        if st.beta.is_black() {
+            return Some(false);
+        }
+        st.prev_pdf = s.pdf;
+        st.prev_delta = true;
+        st.eta_scale *= s.eta * s.eta;
+        st.ray = si.spawn_ray(wi);
+        st.depth += 1;
+        // Russian roulette, as below.
+        if st.depth >= self.rr_depth {
+            let q = (st.beta.max_component() * st.eta_scale).min(0.95);
+            if !(sampler.next_1d() < q) {
+                return Some(false);
+            }
+            st.beta /= q;
+        }
+        Some(true)
     }
 
     /// [`Path::sample_light`] for a Lambert lane: a parallelogram light of uniform radiance is
@@ -577,7 +571,8 @@ impl Integrator for Path {
         stats: &mut RayStats,
         out: &mut [SampledSpectrum],
     ) {
-        if has_delta_lanes(scene) {
+        // See `Path::trace_batch`.
+        if has_delta_surfaces(scene) {
             self.trace_batch::<true>(scene, batch, sampler, stats, out);
         } else {
             self.trace_batch::<false>(scene, batch, sampler, stats, out);
@@ -594,9 +589,9 @@ impl Path {
     /// together (and large scenes trace them as packets). Every path gets the radiance
     /// [`Integrator::radiance`] gives it alone, bit for bit, whatever lane it runs in.
     ///
-    /// With `DELTA`, the perfect-mirror and smooth-glass vertices are finished by the batch's
-    /// delta lanes ([`SpecularLanes`]); without, the loop is compiled without them (for scenes
-    /// that have no such surface: carried along, they lengthened its code).
+    /// With `DELTA`, the perfect-mirror and smooth-glass vertices are shaded by
+    /// [`Path::delta_vertex`]; without, the loop is compiled without it (for scenes that have
+    /// no such surface: carried along, it lengthened the loop's code).
     #[inline(never)]
     fn trace_batch<const DELTA: bool>(
         &self,
@@ -630,8 +625,6 @@ impl Path {
         let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
         let every = every_light(scene);
         let mut lambert = LambertLanes::default();
-        // Made at the first delta vertex (most scenes have none; zeroing it costs).
-        let mut specular: Option<SpecularLanes> = None;
         loop {
             if alive == 0 {
                 if next == n {
@@ -655,14 +648,10 @@ impl Path {
             }
             let mut ended = 0u32;
             lambert.lanes = 0;
-            if let (true, Some(specular)) = (DELTA, &mut specular) {
-                specular.lanes = 0;
-            }
             for i in lanes(alive) {
                 let s = slot[i];
                 sampler.resume(cursors[s]);
-                let delta = if DELTA { Some(&mut specular) } else { None };
-                let lanes = Some((&mut lambert, delta, i));
+                let lanes = Some((&mut lambert, DELTA, i));
                 let o = if every {
                     let mut extra = [None; MAX_SHADOWS];
                     let o =
@@ -702,11 +691,6 @@ impl Path {
                         }
                         None => ended |= 1 << i,
                     }
-                }
-            }
-            if let (true, Some(specular)) = (DELTA, &mut specular) {
-                if specular.lanes != 0 {
-                    ended |= finish_delta(specular, &mut batch, &mut st);
                 }
             }
             for (shadows, pending) in shadows.iter().zip(&pending) {
