@@ -8,11 +8,11 @@ mod support;
 use candela_render::accel::AccelKind;
 use candela_render::integrator::{Integrator, Path, SampleBatch, SAMPLE_QUEUE};
 use candela_render::light::{Components, Emission, Light, PointLight};
-use candela_render::material::{Material, Model};
+use candela_render::material::{Dispersion, Distribution, Material, Microfacet, Model};
 use candela_render::math::{Point3, Ray, Transform, Vec3};
 use candela_render::sampling::{Pcg32, Sampler, SamplerKind};
 use candela_render::shape::{Mesh, Shape, Sphere};
-use candela_render::spectrum::{SampledSpectrum, Wavelengths};
+use candela_render::spectrum::{Ior, SampledSpectrum, Wavelengths};
 use candela_render::stats::RayStats;
 use candela_render::texture::Texture;
 use candela_render::{Rgb, Scene, SceneBuilder};
@@ -130,6 +130,135 @@ fn mixed_scene(spectral: bool) -> Scene {
         },
         Components::from_intensity(Rgb::splat(0.4)),
     ));
+    b.camera(base.camera);
+    let mut scene = b.build(AccelKind::Bvh);
+    if spectral {
+        scene.prepare_spectral();
+    }
+    scene
+}
+
+/// The Cornell box with every delta surface `Path::delta_vertex` shades in a batch, and
+/// nearby ones the general vertex shades: spheres of a one-sided perfect mirror (Mitsuba's
+/// conductor without an index), a two-sided tinted mirror, glass (η = 1.5), an index-matched
+/// glass (η = 1), a dispersive glass (in spectral mode it keeps only the hero wavelength), a
+/// glass with a checkered transmittance, a rough glass and a gold conductor (both general); a
+/// two-sided mirror rectangle seen from both sides; and a glass sphere around the camera (its
+/// rays start inside: total internal reflection). `every` lights it by three point lights
+/// instead of its ceiling light (every vertex samples every light).
+fn delta_scene(spectral: bool, every: bool) -> Scene {
+    let base = support::radiosity::cornell(AccelKind::Bvh);
+    let mut b = SceneBuilder::new();
+    for mat in &base.materials {
+        b.add_material(mat.clone());
+    }
+    let e = b.add_emission(base.emissions[0].clone());
+    for o in base.geometry.objects().iter().take(6) {
+        let emission = o.props.emission.filter(|_| !every).map(|_| e);
+        b.add_shape(o.shape.clone(), o.props.material, emission);
+    }
+    let glass = |eta: f32, t: Texture| Model::Dielectric {
+        eta,
+        dispersion: None,
+        reflectance: Texture::Uniform(Rgb::splat(1.0)),
+        transmittance: t,
+        mf: None,
+    };
+    let clear = || Texture::Uniform(Rgb::splat(1.0));
+    let materials = [
+        Material::one_sided(Model::Conductor {
+            eta_k: None,
+            reflectance: clear(),
+            mf: None,
+        }),
+        Material::two_sided(Model::Specular {
+            reflectance: Texture::Uniform(Rgb::new(0.9, 0.7, 0.5)),
+        }),
+        Material::one_sided(glass(1.5, clear())),
+        Material::one_sided(glass(1.0, Texture::Uniform(Rgb::new(0.8, 0.9, 1.0)))),
+        Material::one_sided(Model::Dielectric {
+            eta: 1.5,
+            dispersion: Some(Box::new(Dispersion {
+                interior: Ior::Cauchy { a: 1.5, b: 0.02 },
+                exterior: 1.0,
+            })),
+            reflectance: clear(),
+            transmittance: clear(),
+            mf: None,
+        }),
+        Material::one_sided(glass(
+            1.33,
+            Texture::Checkered {
+                c1: Rgb::new(1.0, 0.6, 0.6),
+                c2: Rgb::new(0.6, 0.6, 1.0),
+                steps: [8.0, 8.0],
+                offset: [0.0, 0.0],
+            },
+        )),
+        Material::one_sided(Model::Dielectric {
+            eta: 1.5,
+            dispersion: None,
+            reflectance: clear(),
+            transmittance: clear(),
+            mf: Some(Microfacet::new(Distribution::Ggx, 0.3)),
+        }),
+        Material::one_sided(Model::Conductor {
+            eta_k: Some((
+                Texture::Uniform(Rgb::new(0.143, 0.374, 1.442)),
+                Texture::Uniform(Rgb::new(3.983, 2.385, 1.603)),
+            )),
+            reflectance: clear(),
+            mf: None,
+        }),
+    ];
+    let spheres = [
+        ([-0.5, -0.7, -0.3], 0.3),
+        ([0.55, 0.55, -0.5], 0.3),
+        ([0.4, -0.65, 0.3], 0.33),
+        ([-0.6, 0.5, 0.2], 0.25),
+        ([0.0, 0.0, -0.2], 0.3),
+        ([-0.55, -0.1, 0.6], 0.2),
+        ([0.6, -0.05, 0.5], 0.2),
+        ([0.0, -0.8, 0.7], 0.15),
+    ];
+    for (m, (c, r)) in materials.into_iter().zip(spheres) {
+        let m = b.add_material(m);
+        let place = Transform::translation(Vec3::new(c[0], c[1], c[2]))
+            * Transform::scaling(Vec3::new(r, r, r));
+        b.add_shape(Shape::Sphere(Sphere::new(place)), m, None);
+    }
+    // A two-sided mirror open to both sides, seen from both (mirrored onto its front).
+    let mirror = b.add_material(Material::two_sided(Model::Specular {
+        reflectance: Texture::Uniform(Rgb::new(0.8, 0.8, 0.9)),
+    }));
+    b.add_shape(
+        support::radiosity::para([-0.3, 0.1, -0.8], [0.5, 0.0, 0.3], [0.0, 0.6, 0.0]),
+        mirror,
+        None,
+    );
+    // The glass around the camera.
+    let inside = b.add_material(Material::one_sided(glass(1.5, clear())));
+    let eye = base.camera.world_from_camera.point(Point3::ORIGIN);
+    let place =
+        Transform::translation(eye.to_vec()) * Transform::scaling(Vec3::new(0.05, 0.05, 0.05));
+    b.add_shape(Shape::Sphere(Sphere::new(place)), inside, None);
+    if every {
+        for (p, i) in [
+            (Point3::new(0.3, 0.8, 0.5), 0.6),
+            (Point3::new(-0.5, 0.2, 0.9), 0.3),
+            (Point3::new(0.0, 0.9, -0.6), 0.9),
+        ] {
+            b.add_light(Light::Point(
+                PointLight {
+                    position: p,
+                    intensity: Rgb::splat(i),
+                    spectrum: None,
+                    falloff: Default::default(),
+                },
+                Components::from_intensity(Rgb::splat(i)),
+            ));
+        }
+    }
     b.camera(base.camera);
     let mut scene = b.build(AccelKind::Bvh);
     if spectral {
@@ -288,6 +417,27 @@ fn paths_sampling_every_delta_light_agree_in_batches_and_alone() {
         let scene = delta_lit_scene(spectral);
         for (pixel, range, spp) in [((16, 16), (0, 64), 64), ((5, 20), (3, 40), 64)] {
             check_in(&scene, pixel, range, spp, spectral);
+        }
+    }
+}
+
+#[test]
+fn mirror_and_glass_vertices_agree_in_batches_and_alone_in_rgb_and_spectral_mode() {
+    for every in [false, true] {
+        for spectral in [false, true] {
+            let scene = delta_scene(spectral, every);
+            assert!(scene.accel.refills_lanes());
+            for (pixel, range, spp) in [
+                ((16, 16), (0, 64), 64),
+                ((8, 24), (0, 64), 64),
+                ((22, 25), (3, 40), 64),
+                ((20, 10), (60, 100), 128),
+                ((10, 12), (0, 64), 64),
+                ((5, 5), (0, 64), 64),
+                ((27, 20), (0, 64), 64),
+            ] {
+                check_in(&scene, pixel, range, spp, spectral);
+            }
         }
     }
 }

@@ -32,12 +32,13 @@ mod specular;
 
 pub use bsdf::{Bsdf, BsdfModel};
 pub use cook_torrance::CookTorrance;
-pub use dielectric::{Dispersion, REFERENCE_WAVELENGTH};
+pub use dielectric::{relative_eta, sample_smooth, Dispersion, REFERENCE_WAVELENGTH};
 pub use local_model::Whitted;
 pub use microfacet::{Distribution, Microfacet};
 pub use phong::{Lobe, PhongBrdf};
 pub use plastic::{Plastic, RoughCoating, RoughPlastic};
 pub use sample::{BsdfSample, LocalSample};
+pub use specular::sample as sample_specular;
 
 use crate::color::Rgb;
 use crate::math::{Frame, Point2};

@@ -14,7 +14,7 @@ use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
-use crate::material::Model;
+use crate::material::{relative_eta, sample_smooth, sample_specular, Model};
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -95,6 +95,25 @@ impl PathState {
     }
 }
 
+/// True when a material of the scene is one [`Path::delta_vertex`] shades (a perfect mirror
+/// or a smooth dielectric), looked for among its first 256 materials: that path only saves
+/// time (the general vertex gives the same bits), and this is asked once per batch.
+#[inline]
+fn has_delta_surfaces(scene: &Scene) -> bool {
+    scene.materials.iter().take(256).any(|m| {
+        matches!(
+            m.model,
+            Model::Specular { .. }
+                | Model::Conductor {
+                    eta_k: None,
+                    mf: None,
+                    ..
+                }
+                | Model::Dielectric { mf: None, .. }
+        )
+    })
+}
+
 /// The most lights a vertex samples all of (see [`every_light`]).
 const MAX_SHADOWS: usize = 8;
 
@@ -127,9 +146,11 @@ impl Path {
     /// found there, samples a light (the shadow ray is the caller's to test), samples the
     /// next direction and plays Russian roulette.
     ///
-    /// With `defer` (the batch's Lambert lanes and this path's lane), a vertex at a Lambert
-    /// surface stops once it has drawn its numbers and sampled a light, and leaves the rest to
-    /// [`LambertLanes::shade`]: it then returns `None`.
+    /// With `defer` (the batch's Lambert lanes, whether to take [`Path::delta_vertex`], and
+    /// this path's lane), a vertex at a Lambert surface stops once it has drawn its numbers and
+    /// sampled a light, and leaves the rest to [`LambertLanes::shade`]: it then returns `None`;
+    /// a vertex at a perfect mirror or a smooth dielectric is shaded by
+    /// [`Path::delta_vertex`].
     #[inline(always)]
     fn vertex(
         &self,
@@ -137,7 +158,7 @@ impl Path {
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-        defer: Option<(&mut LambertLanes, usize)>,
+        defer: Option<(&mut LambertLanes, bool, usize)>,
         every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
@@ -195,7 +216,11 @@ impl Path {
         }
 
         let material = scene.material(&si);
-        if let (Some((lanes, lane)), Model::Diffuse { reflectance }) = (defer, &material.model) {
+        let (lambert, delta, lane) = match defer {
+            Some((lambert, delta, lane)) => (Some(lambert), delta, lane),
+            None => (None, false, 0),
+        };
+        if let (Some(lanes), Model::Diffuse { reflectance }) = (lambert, &material.model) {
             // A Lambert vertex, left to the batch's Lambert lanes once its numbers are drawn
             // (in the order the scalar vertex below draws them, the roulette's even where the
             // path could end before it: it then goes unused). What `Material::bsdf`,
@@ -249,6 +274,14 @@ impl Path {
                 },
             );
             return None;
+        }
+        if delta {
+            if let Some(alive) = self.delta_vertex(st, &si, material, sampler) {
+                return Some(VertexOutcome {
+                    shadow: None,
+                    alive,
+                });
+            }
         }
         let bsdf = material.bsdf(si.shading_frame(), si.uv, &mut st.lambda);
         // The outgoing direction in the shading frame, shared by every BSDF query below.
@@ -345,6 +378,101 @@ impl Path {
             shadow,
             alive: true,
         })
+    }
+
+    /// The rest of a vertex at a perfect mirror (`specular`, or a conductor without an index)
+    /// or a smooth dielectric, the emission found there added (`None`: the material is neither):
+    /// what the general vertex below does for it — `Material::bsdf`, `Bsdf::local_wo`, the
+    /// model's sample with the numbers drawn as there, `Bsdf::world_sample`, the throughput,
+    /// Πη², the next ray and Russian roulette — with the same operations in the same order,
+    /// without building the BSDF (an out-of-line call returning a large value, another for
+    /// the sample), without the light sampling a delta BSDF skips, and without the shading
+    /// point, unread after a delta vertex (`prev_delta`: the next vertex makes its own before
+    /// reading it). Gives whether the path goes on.
+    #[inline(always)]
+    fn delta_vertex(
+        &self,
+        st: &mut PathState,
+        si: &crate::interaction::SurfaceInteraction,
+        material: &crate::material::Material,
+        sampler: &mut Sampler,
+    ) -> Option<bool> {
+        let refl = |t: &crate::texture::Texture, w: &Wavelengths| {
+            t.spectral(si.uv, w, crate::spectrum::RgbRole::Reflectance)
+        };
+        let frame = si.shading_frame();
+        let (s, flip) = match &material.model {
+            Model::Specular { reflectance }
+            | Model::Conductor {
+                eta_k: None,
+                reflectance,
+                mf: None,
+            } => {
+                let r = refl(reflectance, &st.lambda);
+                // `Bsdf::local_wo`, two-sided as the material says.
+                let mut o = frame.to_local(si.wo);
+                let flip = material.two_sided && o.z < 0.0;
+                if flip {
+                    o.z = -o.z;
+                }
+                // The BSDF's numbers, unread by a mirror.
+                sampler.skip_1d();
+                sampler.skip_1d();
+                sampler.skip_1d();
+                (sample_specular(r, None, o), flip)
+            }
+            Model::Dielectric {
+                eta,
+                dispersion,
+                reflectance,
+                transmittance,
+                mf: None,
+            } => {
+                let (r, t) = (
+                    refl(reflectance, &st.lambda),
+                    refl(transmittance, &st.lambda),
+                );
+                // A dispersive glass on a spectral path keeps only its hero wavelength.
+                let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
+                // A dielectric is never two-sided.
+                let o = frame.to_local(si.wo);
+                let u = sampler.next_1d();
+                sampler.skip_1d();
+                sampler.skip_1d();
+                (sample_smooth(eta, r, t, o, u), false)
+            }
+            _ => return None,
+        };
+        let Some(s) = s else {
+            return Some(false);
+        };
+        // `Bsdf::world_sample`: mirrored back, into the world, finite.
+        let mut wi = s.wi;
+        if flip {
+            wi.z = -wi.z;
+        }
+        let wi = frame.to_world(wi);
+        if !(s.weight.is_finite() && wi.is_finite()) {
+            return Some(false);
+        }
+        st.beta *= s.weight;
+        if st.beta.is_black() {
+            return Some(false);
+        }
+        st.prev_pdf = s.pdf;
+        st.prev_delta = true;
+        st.eta_scale *= s.eta * s.eta;
+        st.ray = si.spawn_ray(wi);
+        st.depth += 1;
+        // Russian roulette, as below.
+        if st.depth >= self.rr_depth {
+            let q = (st.beta.max_component() * st.eta_scale).min(0.95);
+            if !(sampler.next_1d() < q) {
+                return Some(false);
+            }
+            st.beta /= q;
+        }
+        Some(true)
     }
 
     /// [`Path::sample_light`] for a Lambert lane: a parallelogram light of uniform radiance is
@@ -449,6 +577,24 @@ impl Integrator for Path {
         }
     }
 
+    fn radiance_batch(
+        &self,
+        scene: &Scene,
+        batch: SampleBatch<'_>,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        out: &mut [SampledSpectrum],
+    ) {
+        // See `Path::trace_batch`.
+        if has_delta_surfaces(scene) {
+            self.trace_batch::<true>(scene, batch, sampler, stats, out);
+        } else {
+            self.trace_batch::<false>(scene, batch, sampler, stats, out);
+        }
+    }
+}
+
+impl Path {
     /// [`BATCH`] paths side by side: their rays are traced together (small scenes test each
     /// primitive against all of them at once), their vertices shaded one by one, each drawing
     /// from its own sample's cursor. Where a batch costs the same however few of its lanes are
@@ -456,7 +602,12 @@ impl Integrator for Path {
     /// sample at once; otherwise the samples go sixteen at a time, so that camera rays start
     /// together (and large scenes trace them as packets). Every path gets the radiance
     /// [`Integrator::radiance`] gives it alone, bit for bit, whatever lane it runs in.
-    fn radiance_batch(
+    ///
+    /// With `DELTA`, the perfect-mirror and smooth-glass vertices are shaded by
+    /// [`Path::delta_vertex`]; without, the loop is compiled without it (for scenes that have
+    /// no such surface: carried along, it lengthened the loop's code).
+    #[inline(never)]
+    fn trace_batch<const DELTA: bool>(
         &self,
         scene: &Scene,
         batch: SampleBatch<'_>,
@@ -518,7 +669,7 @@ impl Integrator for Path {
             for i in lanes(alive) {
                 let s = slot[i];
                 sampler.resume(cursors[s]);
-                let lanes = Some((&mut lambert, i));
+                let lanes = Some((&mut lambert, DELTA, i));
                 let o = if every {
                     let o =
                         self.vertex(scene, &mut st[i], hits[i], sampler, lanes, Some(&mut extra));
