@@ -87,12 +87,7 @@ impl Bsdf<'_> {
     /// [`Bsdf::sample_local`].
     #[inline]
     pub fn local_wo(&self, wo: Vec3) -> (Vec3, bool) {
-        let mut o = self.frame.to_local(wo);
-        let flip = self.two_sided && o.z < 0.0;
-        if flip {
-            o.z = -o.z;
-        }
-        (o, flip)
+        local_wo(&self.frame, self.two_sided, wo)
     }
 
     /// The incident direction `wi` (world, unit) in the local frame, mirrored like `wo`.
@@ -192,12 +187,8 @@ impl Bsdf<'_> {
     /// finite.
     #[inline(always)]
     fn world_sample(&self, s: LocalSample, flip: bool) -> Option<BsdfSample> {
-        let mut wi = s.wi;
-        if flip {
-            wi.z = -wi.z;
-        }
-        let wi = self.frame.to_world(wi);
-        (s.weight.is_finite() && wi.is_finite()).then_some(BsdfSample {
+        let wi = world_wi(&self.frame, &s, flip)?;
+        Some(BsdfSample {
             wi,
             weight: s.weight,
             pdf: s.pdf,
@@ -241,4 +232,28 @@ impl Bsdf<'_> {
             BsdfModel::Mirror { .. } | BsdfModel::Dielectric { .. }
         )
     }
+}
+
+/// `wo` (world, unit) in the local space of `frame`, mirrored to the upper side when the
+/// surface is `two_sided` and seen from the back; and whether it was mirrored.
+#[inline(always)]
+pub fn local_wo(frame: &Frame, two_sided: bool, wo: Vec3) -> (Vec3, bool) {
+    let mut o = frame.to_local(wo);
+    let flip = two_sided && o.z < 0.0;
+    if flip {
+        o.z = -o.z;
+    }
+    (o, flip)
+}
+
+/// The direction of the local sample `s` in the world (mirrored back when `flip`), when it and
+/// the sample's weight are finite.
+#[inline(always)]
+pub fn world_wi(frame: &Frame, s: &LocalSample, flip: bool) -> Option<Vec3> {
+    let mut wi = s.wi;
+    if flip {
+        wi.z = -wi.z;
+    }
+    let wi = frame.to_world(wi);
+    (s.weight.is_finite() && wi.is_finite()).then_some(wi)
 }

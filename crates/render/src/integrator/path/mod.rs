@@ -14,7 +14,7 @@ use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
-use crate::material::{relative_eta, sample_smooth, sample_specular, Model};
+use crate::material::{local_wo, relative_eta, sample_smooth, sample_specular, world_wi, Model};
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -357,27 +357,9 @@ impl Path {
         st.ray = si.spawn_ray(bs.wi);
         st.depth += 1;
 
-        // Russian roulette from `rr_depth` on: the path survives with probability
-        // q = min(max(β)·Πη², 0.95), where Πη² is the product of the squared relative
-        // indices of the refractions taken so far (`eta_scale`), and survivors are divided
-        // by q. Refraction into a denser medium scales radiance (and so β) by 1/η²;
-        // multiplying it back out keeps paths inside glass from being terminated for
-        // that compression alone, which would make their survivors fireflies (as pbrt-v4
-        // and Mitsuba 3 do).
-        if st.depth >= self.rr_depth {
-            let q = (st.beta.max_component() * st.eta_scale).min(0.95);
-            if !(sampler.next_1d() < q) {
-                return Some(VertexOutcome {
-                    shadow,
-                    alive: false,
-                });
-            }
-            st.beta /= q;
-        }
-        Some(VertexOutcome {
-            shadow,
-            alive: true,
-        })
+        // Russian roulette (see `Path::roulette`).
+        let alive = self.roulette(st, sampler);
+        Some(VertexOutcome { shadow, alive })
     }
 
     /// The rest of a vertex at a perfect mirror (`specular`, or a conductor without an index)
@@ -409,12 +391,7 @@ impl Path {
                 mf: None,
             } => {
                 let r = refl(reflectance, &st.lambda);
-                // `Bsdf::local_wo`, two-sided as the material says.
-                let mut o = frame.to_local(si.wo);
-                let flip = material.two_sided && o.z < 0.0;
-                if flip {
-                    o.z = -o.z;
-                }
+                let (o, flip) = local_wo(&frame, material.two_sided, si.wo);
                 // The BSDF's numbers, unread by a mirror.
                 sampler.skip_1d();
                 sampler.skip_1d();
@@ -435,7 +412,7 @@ impl Path {
                 // A dispersive glass on a spectral path keeps only its hero wavelength.
                 let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
                 // A dielectric is never two-sided.
-                let o = frame.to_local(si.wo);
+                let (o, _) = local_wo(&frame, false, si.wo);
                 let u = sampler.next_1d();
                 sampler.skip_1d();
                 sampler.skip_1d();
@@ -446,15 +423,9 @@ impl Path {
         let Some(s) = s else {
             return Some(false);
         };
-        // `Bsdf::world_sample`: mirrored back, into the world, finite.
-        let mut wi = s.wi;
-        if flip {
-            wi.z = -wi.z;
-        }
-        let wi = frame.to_world(wi);
-        if !(s.weight.is_finite() && wi.is_finite()) {
+        let Some(wi) = world_wi(&frame, &s, flip) else {
             return Some(false);
-        }
+        };
         st.beta *= s.weight;
         if st.beta.is_black() {
             return Some(false);
@@ -464,15 +435,26 @@ impl Path {
         st.eta_scale *= s.eta * s.eta;
         st.ray = si.spawn_ray(wi);
         st.depth += 1;
-        // Russian roulette, as below.
+        Some(self.roulette(st, sampler))
+    }
+
+    /// Russian roulette from `rr_depth` on: the path survives with probability
+    /// q = min(max(β)·Πη², 0.95), where Πη² is the product of the squared relative indices of
+    /// the refractions taken so far (`eta_scale`), and survivors are divided by q. Refraction
+    /// into a denser medium scales radiance (and so β) by 1/η²; multiplying it back out keeps
+    /// paths inside glass from being terminated for that compression alone, which would make
+    /// their survivors fireflies (as pbrt-v4 and Mitsuba 3 do). False when the path ends.
+    /// (The Lambert lanes play it in SIMD: `lambert_lanes.rs`.)
+    #[inline(always)]
+    fn roulette(&self, st: &mut PathState, sampler: &mut Sampler) -> bool {
         if st.depth >= self.rr_depth {
             let q = (st.beta.max_component() * st.eta_scale).min(0.95);
             if !(sampler.next_1d() < q) {
-                return Some(false);
+                return false;
             }
             st.beta /= q;
         }
-        Some(true)
+        true
     }
 
     /// [`Path::sample_light`] for a Lambert lane: a parallelogram light of uniform radiance is
