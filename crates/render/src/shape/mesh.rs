@@ -54,15 +54,29 @@ impl ShearedRay {
     /// The axes that become x, y and z: z along the largest component of the direction, x
     /// and y swapped when it is negative (to keep the winding). The shear is then
     /// `[d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz]]`.
+    ///
+    /// Without branches: the axis of a random direction is not predictable, and its
+    /// mispredictions cost more than these few selects (the same choice as
+    /// [`Vec3::max_dimension`](crate::math::Vec3::max_dimension), ties included).
     #[inline]
     pub(crate) fn axes(ray: &Ray) -> [usize; 3] {
-        let kz = ray.d.max_dimension();
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if ray.d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        [kx, ky, kz]
+        // [kx, ky, kz] by kz and the sign of d[kz].
+        const AXES: [[usize; 3]; 6] = [
+            [1, 2, 0],
+            [2, 1, 0],
+            [2, 0, 1],
+            [0, 2, 1],
+            [0, 1, 2],
+            [1, 0, 2],
+        ];
+        let d = ray.d;
+        let a = d.abs();
+        let x_over_y = a.x > a.y;
+        let (m, dm) = if x_over_y { (a.x, d.x) } else { (a.y, d.y) };
+        let over_z = m > a.z;
+        let kz = if over_z { usize::from(!x_over_y) } else { 2 };
+        let dz = if over_z { dm } else { d.z };
+        AXES[2 * kz + usize::from(dz < 0.0)]
     }
 
     /// A stand-in for queries that test no triangle (analytic shapes ignore it).
@@ -273,6 +287,34 @@ pub fn intersect_triangle(
 mod tests {
     use super::*;
     use crate::math::Vec3;
+
+    /// The branch-free axes are the ones the definition gives: z along the largest |d| (ties
+    /// to the later axis, as `Vec3::max_dimension`), x and y swapped when d[z] < 0.
+    #[test]
+    fn sheared_ray_axes_follow_the_definition() {
+        let mut rng = crate::sampling::Pcg32::new(3, 1);
+        let vals = [0.0, -0.0, 1.0, -1.0, 0.5, -0.5, 2.0];
+        let mut dirs: Vec<Vec3> = Vec::new();
+        for &x in &vals {
+            for &y in &vals {
+                for &z in &vals {
+                    dirs.push(Vec3::new(x, y, z));
+                }
+            }
+        }
+        dirs.extend((0..1000).map(|_| {
+            Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5)
+        }));
+        for d in dirs {
+            let kz = d.max_dimension();
+            let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+            if d[kz] < 0.0 {
+                std::mem::swap(&mut kx, &mut ky);
+            }
+            let ray = Ray::new(Point3::ORIGIN, d);
+            assert_eq!(ShearedRay::axes(&ray), [kx, ky, kz], "{d:?}");
+        }
+    }
 
     fn one(a: Point3, b: Point3, c: Point3) -> Mesh {
         Mesh {
