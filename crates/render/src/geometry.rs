@@ -63,6 +63,12 @@ pub struct Geometry {
     meshes: Vec<Mesh>,
     prims: Vec<PrimRef>,
     bounded: u32,
+    /// The id of each mesh's first triangle (the triangles are numbered mesh after mesh, in
+    /// order): a hit's triangle is found from its id without reading `prims`
+    /// ([`Geometry::triangle`]).
+    first_triangle: Vec<u32>,
+    /// The number of bounded objects (ids `0..bounded_objects`).
+    bounded_objects: u32,
     /// Shared groups (each without instances of its own).
     groups: Vec<Arc<Geometry>>,
     /// The bounds of each group, in its space.
@@ -108,7 +114,10 @@ impl Geometry {
         let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
             (0..objects.len() as u32).partition(|&i| objects[i as usize].shape.bounds().is_some());
         let mut prims: Vec<PrimRef> = bounded.into_iter().map(PrimRef::Object).collect();
+        let bounded_objects = prims.len() as u32;
+        let mut first_triangle = Vec::with_capacity(meshes.len());
         for (m, mesh) in meshes.iter().enumerate() {
+            first_triangle.push(prims.len() as u32);
             prims.extend((0..mesh.len() as u32).map(|tri| PrimRef::Triangle {
                 mesh: m as u32,
                 tri,
@@ -121,6 +130,8 @@ impl Geometry {
             meshes,
             prims,
             bounded: n,
+            first_triangle,
+            bounded_objects,
             groups: Vec::new(),
             group_bounds: Vec::new(),
             instances: Vec::new(),
@@ -233,29 +244,34 @@ impl Geometry {
         if self.prims.len() < PREFETCH_PRIMS {
             return;
         }
-        let prims = || {
+        let triangles = || {
             hits.iter()
                 .enumerate()
                 .filter(move |(i, _)| lanes >> i & 1 != 0)
-                .filter_map(|(_, h)| h.as_ref().map(|h| h.prim as usize))
+                .filter_map(|(_, h)| h.as_ref().and_then(|h| self.triangle(h.prim)))
         };
-        for p in prims() {
-            if let Some(r) = self.prims.get(p) {
-                crate::simd::prefetch(r);
+        for (mesh, tri) in triangles() {
+            if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
+                crate::simd::prefetch(ix);
             }
         }
-        for p in prims() {
-            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p) {
-                if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
-                    crate::simd::prefetch(ix);
-                }
-            }
+        for (mesh, tri) in triangles() {
+            self.meshes[mesh as usize].prefetch_vertices(tri);
         }
-        for p in prims() {
-            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(p) {
-                self.meshes[mesh as usize].prefetch_vertices(tri);
-            }
+    }
+
+    /// The mesh and triangle of primitive `prim` when it is a mesh triangle: from its id alone
+    /// (what `prims` holds for it, without the cache miss of reading it in a large mesh).
+    #[inline(always)]
+    fn triangle(&self, prim: u32) -> Option<(u32, u32)> {
+        let first = *self.first_triangle.first()?;
+        if prim < first || prim >= self.bounded {
+            return None;
         }
+        // The last mesh starting at or before `prim` (an empty mesh starts where the next one
+        // does, and is passed over).
+        let m = self.first_triangle.partition_point(|&f| f <= prim) - 1;
+        Some((m as u32, prim - self.first_triangle[m]))
     }
 
     /// The full interaction for a hit found along `ray`.
@@ -271,7 +287,12 @@ impl Geometry {
         // A parallelogram (walls, floors, area lights) is resolved in the caller: the
         // interaction is not returned through memory from a call (written by the callee in
         // other pieces than the caller reads back), and no call is made.
-        if let Some(&PrimRef::Object(o)) = self.prims.get(hit.prim as usize) {
+        // (Only bounded objects have these shapes: a triangle's record is not read.)
+        let object = match hit.prim < self.bounded_objects {
+            true => self.prims.get(hit.prim as usize),
+            false => None,
+        };
+        if let Some(&PrimRef::Object(o)) = object {
             let obj = &self.objects[o as usize];
             match (&obj.shape, uv) {
                 (Shape::Parallelogram(p), _) => {
@@ -299,6 +320,11 @@ impl Geometry {
             sub: hit.sub,
             leaf: hit.leaf,
         };
+        if let Some((mesh, tri)) = self.triangle(hit.prim) {
+            let m = &self.meshes[mesh as usize];
+            let g = m.geometry_inline(tri, hit.uv[0], hit.uv[1]);
+            return surface_interaction(ray, hit, g, m.props, None);
+        }
         let Some(&prim) = self.prims.get(hit.prim as usize) else {
             return self.instance_interaction(ray, hit);
         };
@@ -462,5 +488,51 @@ mod tests {
             }
         }
         assert!(hits >= 3, "{hits}");
+    }
+
+    /// A triangle found from its id alone is the one `prims` records, for every id of a
+    /// geometry of bounded and unbounded objects and several meshes (one of them empty).
+    #[test]
+    fn triangles_are_found_from_their_ids() {
+        let tri = |z: f32| Mesh {
+            positions: vec![
+                Point3::new(0.0, 0.0, z),
+                Point3::new(1.0, 0.0, z),
+                Point3::new(0.0, 1.0, z),
+                Point3::new(1.0, 1.0, z),
+            ],
+            indices: vec![[0, 1, 2], [1, 3, 2]],
+            ..Default::default()
+        };
+        let object = |shape| Object {
+            shape,
+            props: SurfaceProps::new(0),
+        };
+        let cube = || Shape::Cube(Cube::new(Transform::translation(Vec3::new(0.0, 0.0, -3.0))));
+        let plane = || Shape::Plane(crate::shape::Plane::new(Transform::IDENTITY));
+        for (objects, meshes) in [
+            (
+                vec![object(cube()), object(plane()), object(cube())],
+                vec![tri(0.0), Mesh::default(), tri(1.0), tri(2.0)],
+            ),
+            (vec![object(plane())], vec![Mesh::default(), tri(0.0)]),
+            (vec![object(cube())], vec![]),
+            (vec![], vec![tri(0.0)]),
+        ] {
+            let g = Geometry::new(objects, meshes);
+            for p in 0..g.prim_count() + 2 {
+                let want = match g.prims.get(p as usize) {
+                    Some(&PrimRef::Triangle { mesh, tri }) => Some((mesh, tri)),
+                    _ => None,
+                };
+                assert_eq!(g.triangle(p), want, "{p}");
+                let object = p < g.bounded_objects;
+                assert_eq!(
+                    object,
+                    matches!(g.prims.get(p as usize), Some(PrimRef::Object(_))) && p < g.bounded,
+                    "{p}"
+                );
+            }
+        }
     }
 }

@@ -303,7 +303,11 @@ mod tests {
             }
         }
         dirs.extend((0..1000).map(|_| {
-            Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5)
+            Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            )
         }));
         for d in dirs {
             let kz = d.max_dimension();
