@@ -16,10 +16,10 @@ use crate::aov::{aov_sample, emission_aa as emission_aa_of, near_light_edge, Aov
 use crate::film::{to_fixed, Film, Window};
 use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
-use crate::integrator::{Integrator, SampleBatch, SAMPLE_QUEUE};
+use crate::integrator::{Integrator, SampleBatch, BATCH_RUNS, BATCH_SAMPLES, SAMPLE_QUEUE};
 use crate::math::{Point3, Ray, Vec3, BATCH};
 use crate::sampling::pcg::{hash2, unit_pair};
-use crate::sampling::{Sampler, SamplerKind};
+use crate::sampling::{SampleCursor, Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
@@ -160,33 +160,28 @@ pub fn render_pass_or_cancel(
             let mut stats = RayStats::default();
             let mut sums = Vec::with_capacity(rect.pixels() * film_channels);
             let mut counts = Vec::with_capacity(rect.pixels());
-            // One sampler per tile, reset for every pixel (its tables are large).
-            let mut sampler = Sampler::new(0, 0);
-            for y in rect.y0..rect.y1 {
-                for x in rect.x0..rect.x1 {
-                    let (sum, n) = render_pixel(
+            // The radiance sums of the tile's pixels, in rows.
+            let mut radiance = vec![[0i128; 3]; rect.pixels()];
+            let mut runs = Runs::new(scene, integrator, settings, &filter);
+            for (k, (x, y)) in points(&rect).enumerate() {
+                runs.add_pixel((x, y), k, (first, last), &mut radiance, &mut stats);
+            }
+            runs.trace(&mut radiance, &mut stats);
+            let mut sampler = runs.into_sampler();
+            for ((x, y), sum) in points(&rect).zip(&radiance) {
+                sums.extend_from_slice(sum);
+                if !settings.aovs.is_empty() {
+                    aov_pixel(
                         scene,
-                        integrator,
                         settings,
                         (x, y),
                         (first, last),
                         (&mut sampler, &filter),
                         &mut stats,
+                        &mut sums,
                     );
-                    sums.extend_from_slice(&sum);
-                    if !settings.aovs.is_empty() {
-                        aov_pixel(
-                            scene,
-                            settings,
-                            (x, y),
-                            (first, last),
-                            (&mut sampler, &filter),
-                            &mut stats,
-                            &mut sums,
-                        );
-                    }
-                    counts.push(n);
                 }
+                counts.push(last.saturating_sub(first));
             }
             progress(rect.pixels() as u64 * (last - first) as u64);
             Some((rect, sums, counts, stats))
@@ -200,75 +195,158 @@ pub fn render_pass_or_cancel(
     Some(stats)
 }
 
-/// The fixed-point sums of samples `first..last` of pixel (x, y), and how many there are.
-fn render_pixel(
-    scene: &Scene,
-    integrator: &dyn Integrator,
-    settings: &RenderSettings,
-    (x, y): (usize, usize),
-    (first, last): (u32, u32),
-    (sampler, filter): (&mut Sampler, &FilterSampler),
-    stats: &mut RayStats,
-) -> ([i128; 3], u32) {
-    let (w, h) = (settings.width as f32, settings.height as f32);
-    sampler.reset_for_pixel(
-        settings.sampler,
-        settings.seed,
-        (y * settings.width + x) as u64,
-        settings.spp,
-    );
-    sampler.draw_range(first, last);
-    let mut sum = [0i128; 3];
-    // The samples go to the integrator up to `SAMPLE_QUEUE` at a time (never across a multiple
-    // of it, where the sampler's tables start over), traced side by side; each keeps its own
-    // place in the pixel's sample sequence.
-    const QUEUE: u32 = SAMPLE_QUEUE as u32;
-    let mut rays = [Ray::new(Point3::ORIGIN, Vec3::X); SAMPLE_QUEUE];
-    let mut cursors = [sampler.cursor(); SAMPLE_QUEUE];
-    let mut radiance = [SampledSpectrum::ZERO; SAMPLE_QUEUE];
-    let mut weights = [1f32; SAMPLE_QUEUE];
-    let mut lambdas = [Wavelengths::Rgb; SAMPLE_QUEUE];
-    let spectral = settings.spectral && integrator.spectral();
-    // A pinhole's rays are made a batch at a time, from their screen points.
-    let pinhole = scene.camera.lens.is_none();
-    let mut screen = [[0f32; 2]; SAMPLE_QUEUE];
-    let mut start = first;
-    while start < last {
-        let n = (last.min((start / QUEUE + 1) * QUEUE) - start) as usize;
-        for k in 0..n {
-            if pinhole {
-                let offset;
-                (offset, weights[k]) = filter.sample(sampler.pixel_sample(start + k as u32));
-                screen[k] = screen_point((w, h), (x, y), offset);
-            } else {
-                (rays[k], weights[k]) =
-                    camera_ray(scene, (w, h), (x, y), start + k as u32, (sampler, filter));
-            }
-            // The sample's wavelengths: the number after the camera's.
-            lambdas[k] = if spectral {
-                Wavelengths::sample(sampler.next_1d())
-            } else {
-                Wavelengths::Rgb
-            };
-            cursors[k] = sampler.cursor();
+/// The pixels of `rect`, in rows.
+fn points(rect: &Window) -> impl Iterator<Item = (usize, usize)> + '_ {
+    (rect.y0..rect.y1).flat_map(move |y| (rect.x0..rect.x1).map(move |x| (x, y)))
+}
+
+/// Runs of samples of the tile's pixels (at most [`SAMPLE_QUEUE`] of one pixel each, never
+/// across a multiple of it, where a sampler's tables start over), gathered up to
+/// [`BATCH_RUNS`] at a time and handed to the integrator together, each with its own sampler:
+/// the paths of one pixel's samples fill the lanes that another's leave, rather than each pixel
+/// ending its batch with a few lanes left. Every sample keeps its place in its pixel's sample
+/// sequence (so its value whatever run, lane or batch it is traced in), and the sums are exact,
+/// so the order in which samples are added makes no difference.
+struct Runs<'a> {
+    scene: &'a Scene,
+    integrator: &'a dyn Integrator,
+    settings: &'a RenderSettings,
+    filter: &'a FilterSampler,
+    /// One sampler per run (their tables are large: kept for the whole tile).
+    samplers: Box<[Sampler; BATCH_RUNS]>,
+    /// Runs gathered, samples gathered.
+    runs: usize,
+    len: usize,
+    /// Per sample: camera ray, filter weight, wavelengths, cursor, run, pixel (in the tile).
+    rays: Box<[Ray; BATCH_SAMPLES]>,
+    weights: [f32; BATCH_SAMPLES],
+    lambdas: [Wavelengths; BATCH_SAMPLES],
+    cursors: Box<[SampleCursor; BATCH_SAMPLES]>,
+    samplers_of: [u8; BATCH_SAMPLES],
+    pixels: [u16; BATCH_SAMPLES],
+    /// Screen points of a pinhole's rays (made a batch at a time), with room for a whole batch
+    /// from any sample on.
+    screen: Box<[[f32; 2]; BATCH_SAMPLES + BATCH]>,
+    radiance: Box<[SampledSpectrum; BATCH_SAMPLES]>,
+}
+
+impl<'a> Runs<'a> {
+    fn new(
+        scene: &'a Scene,
+        integrator: &'a dyn Integrator,
+        settings: &'a RenderSettings,
+        filter: &'a FilterSampler,
+    ) -> Self {
+        let sampler = Sampler::new(0, 0);
+        Self {
+            scene,
+            integrator,
+            settings,
+            filter,
+            samplers: Box::new(std::array::from_fn(|_| sampler.clone())),
+            runs: 0,
+            len: 0,
+            rays: Box::new([Ray::new(Point3::ORIGIN, Vec3::X); BATCH_SAMPLES]),
+            weights: [1.0; BATCH_SAMPLES],
+            lambdas: [Wavelengths::Rgb; BATCH_SAMPLES],
+            cursors: Box::new([sampler.cursor(); BATCH_SAMPLES]),
+            samplers_of: [0; BATCH_SAMPLES],
+            pixels: [0; BATCH_SAMPLES],
+            screen: Box::new([[0.0; 2]; BATCH_SAMPLES + BATCH]),
+            radiance: Box::new([SampledSpectrum::ZERO; BATCH_SAMPLES]),
         }
-        if pinhole {
-            for c in (0..n).step_by(BATCH) {
-                let batch: &[[f32; 2]; BATCH] = screen[c..c + BATCH].try_into().unwrap();
-                scene.camera.rays(batch, (n - c).min(BATCH), &mut rays[c..]);
+    }
+
+    /// Adds samples `first..last` of pixel (x, y) (pixel `k` of the tile), tracing the runs
+    /// gathered whenever there are [`BATCH_RUNS`] of them.
+    fn add_pixel(
+        &mut self,
+        (x, y): (usize, usize),
+        k: usize,
+        (first, last): (u32, u32),
+        radiance: &mut [[i128; 3]],
+        stats: &mut RayStats,
+    ) {
+        const QUEUE: u32 = SAMPLE_QUEUE as u32;
+        let settings = self.settings;
+        let (w, h) = (settings.width as f32, settings.height as f32);
+        let spectral = settings.spectral && self.integrator.spectral();
+        // A pinhole's rays are made a batch at a time, from their screen points.
+        let pinhole = self.scene.camera.lens.is_none();
+        let mut start = first;
+        while start < last {
+            let n = (last.min((start / QUEUE + 1) * QUEUE) - start) as usize;
+            let run = self.runs;
+            let sampler = &mut self.samplers[run];
+            sampler.reset_for_pixel(
+                settings.sampler,
+                settings.seed,
+                (y * settings.width + x) as u64,
+                settings.spp,
+            );
+            sampler.draw_range(first, last);
+            let at = self.len;
+            for j in at..at + n {
+                let i = start + (j - at) as u32;
+                if pinhole {
+                    let offset;
+                    (offset, self.weights[j]) = self.filter.sample(sampler.pixel_sample(i));
+                    self.screen[j] = screen_point((w, h), (x, y), offset);
+                } else {
+                    (self.rays[j], self.weights[j]) =
+                        camera_ray(self.scene, (w, h), (x, y), i, (sampler, self.filter));
+                }
+                // The sample's wavelengths: the number after the camera's.
+                self.lambdas[j] = if spectral {
+                    Wavelengths::sample(sampler.next_1d())
+                } else {
+                    Wavelengths::Rgb
+                };
+                self.cursors[j] = sampler.cursor();
+                self.samplers_of[j] = run as u8;
+                self.pixels[j] = k as u16;
             }
+            if pinhole {
+                for c in (at..at + n).step_by(BATCH) {
+                    let batch: &[[f32; 2]; BATCH] = self.screen[c..c + BATCH].try_into().unwrap();
+                    let count = (at + n - c).min(BATCH);
+                    self.scene.camera.rays(batch, count, &mut self.rays[c..]);
+                }
+            }
+            self.len += n;
+            self.runs += 1;
+            start += n as u32;
+            if self.runs == BATCH_RUNS {
+                self.trace(radiance, stats);
+            }
+        }
+    }
+
+    /// Traces the samples gathered and adds them to their pixels' sums.
+    fn trace(&mut self, radiance: &mut [[i128; 3]], stats: &mut RayStats) {
+        let n = self.len;
+        if n == 0 {
+            return;
         }
         let batch = SampleBatch {
-            rays: &rays[..n],
-            lambdas: &mut lambdas[..n],
-            cursors: &mut cursors[..n],
+            rays: &self.rays[..n],
+            lambdas: &mut self.lambdas[..n],
+            cursors: &mut self.cursors[..n],
+            samplers_of: &self.samplers_of[..n],
         };
-        integrator.radiance_batch(scene, batch, sampler, stats, &mut radiance[..n]);
-        for ((l, &weight), lambda) in radiance[..n].iter().zip(&weights).zip(&lambdas) {
-            let l = lambda.to_rgb(*l);
+        self.integrator.radiance_batch(
+            self.scene,
+            batch,
+            &mut self.samplers[..],
+            stats,
+            &mut self.radiance[..n],
+        );
+        for j in 0..n {
+            let (l, weight) = (self.lambdas[j].to_rgb(self.radiance[j]), self.weights[j]);
             let l = if weight == 1.0 { l } else { l * weight };
             stats.samples += 1;
             if l.is_finite() {
+                let sum = &mut radiance[self.pixels[j] as usize];
                 sum[0] += to_fixed(l.r);
                 sum[1] += to_fixed(l.g);
                 sum[2] += to_fixed(l.b);
@@ -276,9 +354,15 @@ fn render_pixel(
                 stats.rejected_samples += 1;
             }
         }
-        start += n as u32;
+        self.runs = 0;
+        self.len = 0;
     }
-    (sum, last.saturating_sub(first))
+
+    /// One of the samplers, for other uses of the tile.
+    fn into_sampler(self) -> Sampler {
+        let [s, ..] = *self.samplers;
+        s
+    }
 }
 
 /// The camera ray of sample `i` of pixel (x, y) of a `w × h` image and the sample's filter

@@ -6,10 +6,10 @@
 mod support;
 
 use candela_render::accel::AccelKind;
-use candela_render::integrator::{Integrator, Path, SampleBatch, SAMPLE_QUEUE};
+use candela_render::integrator::{Integrator, Path, SampleBatch, BATCH_RUNS, SAMPLE_QUEUE};
 use candela_render::light::{Components, Emission, Light, PointLight};
 use candela_render::material::{Dispersion, Distribution, Material, Microfacet, Model};
-use candela_render::math::{Point3, Ray, Transform, Vec3};
+use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::sampling::{Pcg32, Sampler, SamplerKind};
 use candela_render::shape::{Mesh, Shape, Sphere};
 use candela_render::spectrum::{Ior, SampledSpectrum, Wavelengths};
@@ -308,44 +308,59 @@ fn check(scene: &Scene, pixel: (usize, usize), range: (u32, u32), spp: u32) {
 }
 
 /// [`check`], with four sampled wavelengths per path when `spectral`.
-fn check_in(
-    scene: &Scene,
-    (x, y): (usize, usize),
-    (first, last): (u32, u32),
-    spp: u32,
-    spectral: bool,
-) {
+fn check_in(scene: &Scene, pixel: (usize, usize), range: (u32, u32), spp: u32, spectral: bool) {
+    check_runs(scene, &[(pixel, range)], spp, spectral);
+}
+
+/// Samples `first..last` of pixel (x, y).
+type Run = ((usize, usize), (u32, u32));
+
+/// Runs of samples `first..last` of pixels (x, y) of a 32 × 32 image (each run with its own
+/// sampler, as the renderer gathers them), traced as one batch and one by one: the same
+/// radiance and wavelengths, bit for bit.
+fn check_runs(scene: &Scene, runs: &[Run], spp: u32, spectral: bool) {
     let path = Path {
         max_depth: Some(8),
         rr_depth: 2,
         hide_emitters: false,
     };
-    let mut sampler = Sampler::new(0, 0);
-    sampler.reset_for_pixel(SamplerKind::Sobol, 7, (y * 32 + x) as u64, spp);
-    sampler.draw_range(first, last);
-    let n = (last - first) as usize;
-    let mut rays = vec![Ray::new(Point3::ORIGIN, Vec3::X); n];
+    let mut samplers = vec![Sampler::new(0, 0); runs.len()];
+    let mut rays = Vec::new();
     let mut cursors = Vec::new();
-    let mut lambdas = vec![Wavelengths::Rgb; n];
-    for (k, ray) in rays.iter_mut().enumerate() {
-        let [sx, sy] = sampler.pixel_sample(first + k as u32);
-        *ray = scene
-            .camera
-            .ray((x as f32 + sx) / 32.0, 1.0 - (y as f32 + sy) / 32.0);
-        if spectral {
-            lambdas[k] = Wavelengths::sample(sampler.next_1d());
+    let mut lambdas = Vec::new();
+    let mut samplers_of = Vec::new();
+    let mut labels = Vec::new();
+    for (r, (&((x, y), (first, last)), sampler)) in runs.iter().zip(&mut samplers).enumerate() {
+        sampler.reset_for_pixel(SamplerKind::Sobol, 7, (y * 32 + x) as u64, spp);
+        sampler.draw_range(first, last);
+        for i in first..last {
+            let [sx, sy] = sampler.pixel_sample(i);
+            rays.push(
+                scene
+                    .camera
+                    .ray((x as f32 + sx) / 32.0, 1.0 - (y as f32 + sy) / 32.0),
+            );
+            lambdas.push(if spectral {
+                Wavelengths::sample(sampler.next_1d())
+            } else {
+                Wavelengths::Rgb
+            });
+            cursors.push(sampler.cursor());
+            samplers_of.push(r as u8);
+            labels.push(format!("pixel ({x}, {y}) sample {i}"));
         }
-        cursors.push(sampler.cursor());
     }
+    let n = rays.len();
     let singles: Vec<(SampledSpectrum, Wavelengths)> = (0..n)
         .map(|k| {
+            let sampler = &mut samplers[samplers_of[k] as usize];
             sampler.resume(cursors[k]);
             let mut lambda = lambdas[k];
             let l = path.radiance(
                 scene,
                 &rays[k],
                 &mut lambda,
-                &mut sampler,
+                sampler,
                 &mut RayStats::default(),
             );
             (l, lambda)
@@ -356,11 +371,12 @@ fn check_in(
         rays: &rays,
         lambdas: &mut lambdas,
         cursors: &mut cursors,
+        samplers_of: &samplers_of,
     };
     path.radiance_batch(
         scene,
         batch,
-        &mut sampler,
+        &mut samplers,
         &mut RayStats::default(),
         &mut out,
     );
@@ -369,13 +385,45 @@ fn check_in(
         assert_eq!(
             out[k].0.map(f32::to_bits),
             singles[k].0 .0.map(f32::to_bits),
-            "pixel ({x}, {y}) sample {}",
-            first as usize + k
+            "{}",
+            labels[k]
         );
-        assert_eq!(lambdas[k], singles[k].1);
+        assert_eq!(lambdas[k], singles[k].1, "{}", labels[k]);
         lit += !out[k].is_black() as usize;
     }
-    assert!(lit > 0, "pixel ({x}, {y}): nothing lit, nothing compared");
+    assert!(lit > 0, "{runs:?}: nothing lit, nothing compared");
+}
+
+/// Runs of several pixels in one batch (the renderer gathers up to `BATCH_RUNS`): paths of one
+/// pixel take the lanes another's leave, and each still gets its single path's bits, in small
+/// scenes (lanes refilled), in the every-light mode, in spectral mode, and in a deep tree.
+#[test]
+fn runs_of_several_pixels_in_one_batch_agree_with_single_paths() {
+    let runs = [
+        ((16, 16), (0, 64)),
+        ((5, 20), (0, 64)),
+        ((25, 9), (3, 40)),
+        ((12, 28), (0, 17)),
+    ];
+    assert!(runs.len() <= BATCH_RUNS);
+    let cornell = support::radiosity::cornell(AccelKind::Bvh);
+    assert!(cornell.accel.refills_lanes());
+    check_runs(&cornell, &runs, 64, false);
+    for spectral in [false, true] {
+        check_runs(&mixed_scene(spectral), &runs, 64, spectral);
+        check_runs(&delta_lit_scene(spectral), &runs, 64, spectral);
+    }
+    check_runs(&delta_scene(false, false), &runs, 64, false);
+    let large = large_scene();
+    assert!(!large.accel.refills_lanes());
+    check_runs(&large, &runs, 64, false);
+    // Two runs of one pixel (its samples 0..64 and 64..128), beside another pixel's.
+    check_runs(
+        &cornell,
+        &[((7, 7), (0, 64)), ((7, 7), (64, 128)), ((20, 3), (0, 64))],
+        128,
+        false,
+    );
 }
 
 #[test]

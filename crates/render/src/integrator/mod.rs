@@ -43,19 +43,21 @@ pub trait Integrator: Sync {
         true
     }
 
-    /// The radiance along each of `rays` (at most [`SAMPLE_QUEUE`]), samples of one pixel: ray i, in the lanes of `lambdas[i]`, continues the sample at `cursors[i]` (left
-    /// at its end) and its radiance goes to `out[i]`. Each result equals what
+    /// The radiance along each of `rays` (at most [`BATCH_SAMPLES`]): ray i, in the lanes of
+    /// `lambdas[i]`, continues the sample at `cursors[i]` (left at its end) of the pixel of
+    /// `samplers[samplers_of[i]]`, and its radiance goes to `out[i]`. Each result equals what
     /// [`Integrator::radiance`] gives for that ray and sample alone; integrators that can trace
     /// paths side by side do so.
     fn radiance_batch(
         &self,
         scene: &Scene,
         batch: SampleBatch<'_>,
-        sampler: &mut Sampler,
+        samplers: &mut [Sampler],
         stats: &mut RayStats,
         out: &mut [SampledSpectrum],
     ) {
         for (i, ray) in batch.rays.iter().enumerate() {
+            let sampler = &mut samplers[batch.samplers_of[i] as usize];
             sampler.resume(batch.cursors[i]);
             out[i] = self.radiance(scene, ray, &mut batch.lambdas[i], sampler, stats);
             batch.cursors[i] = sampler.cursor();
@@ -63,21 +65,33 @@ pub trait Integrator: Sync {
     }
 }
 
-/// The most samples of a pixel handed to [`Integrator::radiance_batch`] at once: the samples
-/// whose numbers a pixel sampler tabulates together (four batches).
+/// The most samples of one run (of one pixel, with one sampler) handed to
+/// [`Integrator::radiance_batch`]: the samples whose numbers a pixel sampler tabulates
+/// together (four batches).
 pub const SAMPLE_QUEUE: usize = crate::sampling::sampler::TABLE_SAMPLES;
 const _: () = assert!(SAMPLE_QUEUE.is_multiple_of(crate::math::BATCH));
 
-/// Samples of one pixel traced side by side: sample i has the camera ray `rays[i]`, the
-/// wavelengths `lambdas[i]` (left as the path ends them) and its place in the pixel's sample
-/// sequence `cursors[i]` (left at the sample's end).
+/// The most runs of at most [`SAMPLE_QUEUE`] samples (of one pixel each, each with its own
+/// sampler) handed to [`Integrator::radiance_batch`] at once: paths traced side by side then
+/// end in one drain where only a few are left, for several pixels, rather than one per pixel.
+pub const BATCH_RUNS: usize = 4;
+
+/// The most samples handed to [`Integrator::radiance_batch`] at once.
+pub const BATCH_SAMPLES: usize = BATCH_RUNS * SAMPLE_QUEUE;
+
+/// Samples traced side by side: sample i has the camera ray `rays[i]`, the wavelengths
+/// `lambdas[i]` (left as the path ends them) and its place in its pixel's sample sequence
+/// `cursors[i]` (left at the sample's end), drawn from the sampler `samplers_of[i]`.
 pub struct SampleBatch<'a> {
-    /// The camera rays (at most [`SAMPLE_QUEUE`]).
+    /// The camera rays (at most [`BATCH_SAMPLES`]).
     pub rays: &'a [Ray],
     /// What each path's lanes mean.
     pub lambdas: &'a mut [Wavelengths],
     /// Where each sample's numbers continue.
     pub cursors: &'a mut [SampleCursor],
+    /// The sampler of each sample's pixel (an index into the samplers handed over with the
+    /// batch).
+    pub samplers_of: &'a [u8],
 }
 
 /// The RGB radiance `integrator` gives along `ray` (unit tests of single rays).

@@ -10,7 +10,7 @@
 
 mod lambert_lanes;
 
-use super::{Integrator, SampleBatch, SAMPLE_QUEUE};
+use super::{Integrator, SampleBatch, BATCH_SAMPLES};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
@@ -563,15 +563,15 @@ impl Integrator for Path {
         &self,
         scene: &Scene,
         batch: SampleBatch<'_>,
-        sampler: &mut Sampler,
+        samplers: &mut [Sampler],
         stats: &mut RayStats,
         out: &mut [SampledSpectrum],
     ) {
         // See `Path::trace_batch`.
         if has_delta_surfaces(scene) {
-            self.trace_batch::<true>(scene, batch, sampler, stats, out);
+            self.trace_batch::<true>(scene, batch, samplers, stats, out);
         } else {
-            self.trace_batch::<false>(scene, batch, sampler, stats, out);
+            self.trace_batch::<false>(scene, batch, samplers, stats, out);
         }
     }
 }
@@ -593,7 +593,7 @@ impl Path {
         &self,
         scene: &Scene,
         batch: SampleBatch<'_>,
-        sampler: &mut Sampler,
+        samplers: &mut [Sampler],
         stats: &mut RayStats,
         out: &mut [SampledSpectrum],
     ) {
@@ -601,9 +601,12 @@ impl Path {
             rays,
             lambdas,
             cursors,
+            samplers_of,
         } = batch;
         let n = rays.len();
-        debug_assert!(n <= SAMPLE_QUEUE && cursors.len() == n && out.len() >= n);
+        debug_assert!(
+            n <= BATCH_SAMPLES && cursors.len() == n && samplers_of.len() == n && out.len() >= n
+        );
         let refill = scene.accel.refills_lanes();
         let unused = Ray::new(crate::math::Point3::ORIGIN, crate::math::Vec3::X);
         let mut st = [PathState::new(&unused, Wavelengths::Rgb); BATCH];
@@ -650,6 +653,7 @@ impl Path {
             lambert.lanes = 0;
             for i in lanes(alive) {
                 let s = slot[i];
+                let sampler = &mut samplers[samplers_of[s] as usize];
                 sampler.resume(cursors[s]);
                 let lanes = Some((&mut lambert, DELTA, i));
                 let o = if every {
