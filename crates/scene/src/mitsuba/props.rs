@@ -556,21 +556,12 @@ fn transform(
                     .attr("value")
                     .ok_or_else(|| err("<matrix> needs the attribute 'value'"))?;
                 let v = numbers(src, a)?;
-                let m = M4::from_values(&v).ok_or_else(|| {
+                M4::from_values(&v).ok_or_else(|| {
                     src.error(
                         a.pos,
                         format!("a matrix needs 9 or 16 numbers, not {}", v.len()),
                     )
-                })?;
-                // Shapes, lights and cameras bring rays and points through an affine map (a
-                // projective one would bend the rays' parametrisation and the normals).
-                if m.0[3] != [0.0, 0.0, 0.0, 1.0] {
-                    return Err(src.error(
-                        a.pos,
-                        "a matrix's last row must be 0 0 0 1 (projective transformations are not supported)",
-                    ));
-                }
-                m
+                })?
             }
             t => return Err(err(&format!("<{t}> cannot appear inside a <transform>"))),
         };
