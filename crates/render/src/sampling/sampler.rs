@@ -440,6 +440,36 @@ impl Sampler {
         [to_unit(x), to_unit(y)]
     }
 
+    /// The numbers a Lambert vertex draws, in order: a pair (the light sample), one number
+    /// passed over, a pair (the direction) and, when `roulette`, one number: what
+    /// [`Sampler::next_2d`], [`Sampler::skip_1d`], [`Sampler::next_2d`] and
+    /// [`Sampler::next_1d`] give one after another, read from the chunk's tables at once when
+    /// they hold them all.
+    #[inline(always)]
+    pub fn lambert_numbers(&mut self, roulette: bool) -> ([f32; 2], [f32; 2], Option<f32>) {
+        if let Mode::Sobol(_) = self.mode {
+            let d = self.dim as usize;
+            let j = self.index.wrapping_sub(self.chunk) as usize;
+            // The tables of dimensions d, d + 3 and (with the roulette) d + 5.
+            let need = if roulette { 0b10_1001 } else { 0b1001 };
+            if d + 6 <= BATCH_DIMS
+                && j < CHUNK
+                && (self.batched >> d) & need == need
+                && j >= self.batch_from[d] as usize
+                && j >= self.batch_from[d + 3] as usize
+                && (!roulette || j >= self.batch_from[d + 5] as usize)
+            {
+                self.dim += if roulette { 6 } else { 5 };
+                let u_rr = roulette.then(|| self.batch[d + 5][j][0]);
+                return (self.batch[d][j], self.batch[d + 3][j], u_rr);
+            }
+        }
+        let u = self.next_2d();
+        self.skip_1d();
+        let u2 = self.next_2d();
+        (u, u2, roulette.then(|| self.next_1d()))
+    }
+
     /// A uniform integer in `[0, n)` (`n` > 0).
     #[inline]
     pub fn next_index(&mut self, n: u32) -> u32 {
@@ -596,6 +626,49 @@ pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A Lambert vertex's numbers drawn at once are the ones drawn one by one, from every
+    /// dimension (tabulated or not, the tables' last ones included), with and without the
+    /// roulette's, and from samples drawn out of order (their tables filled by a later sample).
+    #[test]
+    fn lambert_numbers_are_the_numbers_drawn_one_by_one() {
+        for kind in [
+            SamplerKind::Sobol,
+            SamplerKind::Stratified,
+            SamplerKind::Independent,
+        ] {
+            for (first, index) in [(0u32, 0u32), (0, 5), (0, 63), (64, 100), (40, 20)] {
+                for start in 0..40 {
+                    for roulette in [false, true] {
+                        let mut one = Sampler::for_pixel_with(kind, 3, 17, 128);
+                        one.draw_range(first.min(index), 128);
+                        // A later sample fills the tables first.
+                        one.pixel_sample(first);
+                        for _ in 0..start + 6 {
+                            one.next_1d();
+                        }
+                        let mut all = one.clone();
+                        for s in [&mut one, &mut all] {
+                            s.pixel_sample(index);
+                            for _ in 0..start {
+                                s.skip_1d();
+                            }
+                        }
+                        let u = one.next_2d();
+                        one.skip_1d();
+                        let u2 = one.next_2d();
+                        let u_rr = roulette.then(|| one.next_1d());
+                        let got = all.lambert_numbers(roulette);
+                        let at = format!("{kind:?} {first} {index} {start} {roulette}");
+                        assert_eq!(got.0.map(f32::to_bits), u.map(f32::to_bits), "{at}");
+                        assert_eq!(got.1.map(f32::to_bits), u2.map(f32::to_bits), "{at}");
+                        assert_eq!(got.2.map(f32::to_bits), u_rr.map(f32::to_bits), "{at}");
+                        assert_eq!(one.next_1d().to_bits(), all.next_1d().to_bits(), "{at}");
+                    }
+                }
+            }
+        }
+    }
 
     /// The first 2^k samples of every pair of dimensions form a (0, 2)-net: each of the 2^k
     /// elementary intervals of area 2^-k holds exactly one point (checked for 1 × 2^k strips

@@ -233,9 +233,9 @@ impl Path {
             st.prev.p = si.p;
             st.prev.n = if cos_o < 0.0 { -frame.n } else { frame.n };
             st.prev.reflect_only = true;
+            let (u, u2, u_rr) = sampler.lambert_numbers(st.depth + 1 >= self.rr_depth);
             let light = if every.is_some() {
                 // Every light, each sampled by itself with the same numbers (as below).
-                let u = sampler.next_2d();
                 for (k, light) in lights.iter().enumerate() {
                     let ls = light.sample_from(
                         &scene.geometry,
@@ -248,11 +248,8 @@ impl Path {
                 }
                 LaneLight::Given
             } else {
-                self.lane_light(scene, st, &st.prev, sampler)
+                self.lane_light(scene, st, &st.prev, u)
             };
-            sampler.skip_1d();
-            let u2 = sampler.next_2d();
-            let u_rr = (st.depth + 1 >= self.rr_depth).then(|| sampler.next_1d());
             st.prev_delta = false;
             st.depth += 1;
             lanes.set(
@@ -465,10 +462,9 @@ impl Path {
         scene: &'s Scene,
         st: &PathState,
         sp: &ShadingPoint,
-        sampler: &mut Sampler,
+        mut u: [f32; 2],
     ) -> LaneLight<'s> {
         let lights = &scene.lights[..];
-        let mut u = sampler.next_2d();
         let Some((pick, pick_pdf, u0)) = scene.light_selector.pick(lights, sp, u[0]) else {
             return LaneLight::None;
         };
