@@ -74,7 +74,7 @@ const _: () = assert!(SAMPLE_QUEUE.is_multiple_of(crate::math::BATCH));
 /// The most runs of at most [`SAMPLE_QUEUE`] samples (of one pixel each, each with its own
 /// sampler) handed to [`Integrator::radiance_batch`] at once: paths traced side by side then
 /// end in one drain where only a few are left, for several pixels, rather than one per pixel.
-pub const BATCH_RUNS: usize = 4;
+pub const BATCH_RUNS: usize = 16;
 
 /// The most samples handed to [`Integrator::radiance_batch`] at once.
 pub const BATCH_SAMPLES: usize = BATCH_RUNS * SAMPLE_QUEUE;
