@@ -16,7 +16,7 @@ use super::packet::{Coherence, Groups};
 use super::Bvh;
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
-use crate::math::{RayBatch, BATCH};
+use crate::math::{Ray, RayBatch, BATCH};
 use crate::simd::{SimdLevel, Wide, WideKernel};
 use crate::stats::RayStats;
 
@@ -84,8 +84,9 @@ impl Bvh {
                 self.intersect_packet(level, geometry, rays, c, lanes, hits, stats);
             }
             let rest = rays.active & !groups.lanes();
+            let single = single_rays(rays, rest);
             for i in crate::math::lanes(rest) {
-                hits[i] = self.intersect(geometry, &rays.ray(i), stats);
+                hits[i] = self.intersect(geometry, &single[i], stats);
             }
             return;
         }
@@ -146,8 +147,9 @@ impl Bvh {
                 hit |= self.occluded_packet(level, geometry, rays, c, lanes, stats);
             }
             let rest = rays.active & !groups.lanes();
+            let single = single_rays(rays, rest);
             for i in crate::math::lanes(rest) {
-                if self.occluded(geometry, &rays.ray(i), stats) {
+                if self.occluded(geometry, &single[i], stats) {
                     hit |= 1 << i;
                 }
             }
@@ -197,6 +199,18 @@ impl Bvh {
         };
         Coherence::groups(rays, active)
     }
+}
+
+/// The rays of lanes `lanes` of `rays` made all before any is traced ray by ray: a ray written
+/// field by field and read back at once by wider loads waits for its stores to retire (a load
+/// is forwarded from one store only); made first, the stores have retired by then.
+#[inline(always)]
+fn single_rays(rays: &RayBatch, lanes: u32) -> [Ray; BATCH] {
+    let mut single = [Ray::new(crate::math::Point3::ORIGIN, crate::math::Vec3::X); BATCH];
+    for i in crate::math::lanes(lanes) {
+        single[i] = rays.ray(i);
+    }
+    single
 }
 
 /// The narrowest registers packets are taken on (see [`super::packet`]).
