@@ -145,47 +145,50 @@ pub fn render_pass_or_cancel(
     let filter = FilterSampler::new(settings.filter);
     let tiles: Option<Vec<TileSums>> = (0..tiles_x * tiles_y)
         .into_par_iter()
-        .map(|tile| {
-            if cancel.load(Ordering::Relaxed) {
-                return None;
-            }
-            let x0 = win.x0 + (tile % tiles_x) * TILE;
-            let y0 = win.y0 + (tile / tiles_x) * TILE;
-            let rect = Window {
-                x0,
-                x1: (x0 + TILE).min(win.x1),
-                y0,
-                y1: (y0 + TILE).min(win.y1),
-            };
-            let mut stats = RayStats::default();
-            let mut sums = Vec::with_capacity(rect.pixels() * film_channels);
-            let mut counts = Vec::with_capacity(rect.pixels());
-            // The radiance sums of the tile's pixels, in rows.
-            let mut radiance = vec![[0i128; 3]; rect.pixels()];
-            let mut runs = Runs::new(scene, integrator, settings, &filter);
-            for (k, (x, y)) in points(&rect).enumerate() {
-                runs.add_pixel((x, y), k, (first, last), &mut radiance, &mut stats);
-            }
-            runs.trace(&mut radiance, &mut stats);
-            let mut sampler = runs.into_sampler();
-            for ((x, y), sum) in points(&rect).zip(&radiance) {
-                sums.extend_from_slice(sum);
-                if !settings.aovs.is_empty() {
-                    aov_pixel(
-                        scene,
-                        settings,
-                        (x, y),
-                        (first, last),
-                        (&mut sampler, &filter),
-                        &mut stats,
-                        &mut sums,
-                    );
+        // Each worker's runs (their samplers are large) serve tile after tile.
+        .map_init(
+            || Runs::new(scene, integrator, settings, &filter),
+            |runs, tile| {
+                if cancel.load(Ordering::Relaxed) {
+                    return None;
                 }
-                counts.push(last.saturating_sub(first));
-            }
-            progress(rect.pixels() as u64 * (last - first) as u64);
-            Some((rect, sums, counts, stats))
-        })
+                let x0 = win.x0 + (tile % tiles_x) * TILE;
+                let y0 = win.y0 + (tile / tiles_x) * TILE;
+                let rect = Window {
+                    x0,
+                    x1: (x0 + TILE).min(win.x1),
+                    y0,
+                    y1: (y0 + TILE).min(win.y1),
+                };
+                let mut stats = RayStats::default();
+                let mut sums = Vec::with_capacity(rect.pixels() * film_channels);
+                let mut counts = Vec::with_capacity(rect.pixels());
+                // The radiance sums of the tile's pixels, in rows.
+                let mut radiance = vec![[0i128; 3]; rect.pixels()];
+                for (k, (x, y)) in points(&rect).enumerate() {
+                    runs.add_pixel((x, y), k, (first, last), &mut radiance, &mut stats);
+                }
+                runs.trace(&mut radiance, &mut stats);
+                let sampler = runs.sampler();
+                for ((x, y), sum) in points(&rect).zip(&radiance) {
+                    sums.extend_from_slice(sum);
+                    if !settings.aovs.is_empty() {
+                        aov_pixel(
+                            scene,
+                            settings,
+                            (x, y),
+                            (first, last),
+                            (&mut *sampler, &filter),
+                            &mut stats,
+                            &mut sums,
+                        );
+                    }
+                    counts.push(last.saturating_sub(first));
+                }
+                progress(rect.pixels() as u64 * (last - first) as u64);
+                Some((rect, sums, counts, stats))
+            },
+        )
         .collect();
     let mut stats = RayStats::default();
     for (rect, sums, counts, s) in tiles? {
@@ -358,10 +361,9 @@ impl<'a> Runs<'a> {
         self.len = 0;
     }
 
-    /// One of the samplers, for other uses of the tile.
-    fn into_sampler(self) -> Sampler {
-        let [s, ..] = *self.samplers;
-        s
+    /// One of the samplers, for other uses of the tile (between batches).
+    fn sampler(&mut self) -> &mut Sampler {
+        &mut self.samplers[0]
     }
 }
 
