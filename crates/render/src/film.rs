@@ -78,6 +78,11 @@ impl Window {
         self.width() * self.height()
     }
 
+    /// Its pixels (x, y), in rows.
+    pub fn points(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        (self.y0..self.y1).flat_map(move |y| (self.x0..self.x1).map(move |x| (x, y)))
+    }
+
     /// True when the window lies inside a `width × height` image and is not empty.
     pub fn fits(&self, width: usize, height: usize) -> bool {
         self.x0 < self.x1 && self.y0 < self.y1 && self.x1 <= width && self.y1 <= height

@@ -67,8 +67,6 @@ pub struct Geometry {
     /// order): a hit's triangle is found from its id without reading `prims`
     /// ([`Geometry::triangle`]).
     first_triangle: Vec<u32>,
-    /// The number of bounded objects (ids `0..bounded_objects`).
-    bounded_objects: u32,
     /// Shared groups (each without instances of its own).
     groups: Vec<Arc<Geometry>>,
     /// The bounds of each group, in its space.
@@ -114,7 +112,6 @@ impl Geometry {
         let (bounded, unbounded): (Vec<u32>, Vec<u32>) =
             (0..objects.len() as u32).partition(|&i| objects[i as usize].shape.bounds().is_some());
         let mut prims: Vec<PrimRef> = bounded.into_iter().map(PrimRef::Object).collect();
-        let bounded_objects = prims.len() as u32;
         let mut first_triangle = Vec::with_capacity(meshes.len());
         for (m, mesh) in meshes.iter().enumerate() {
             first_triangle.push(prims.len() as u32);
@@ -131,7 +128,6 @@ impl Geometry {
             prims,
             bounded: n,
             first_triangle,
-            bounded_objects,
             groups: Vec::new(),
             group_bounds: Vec::new(),
             instances: Vec::new(),
@@ -260,6 +256,13 @@ impl Geometry {
         }
     }
 
+    /// The number of bounded objects (ids `0..bounded_objects()`): the first triangle's id, or
+    /// every bounded primitive when there are no meshes.
+    #[inline(always)]
+    fn bounded_objects(&self) -> u32 {
+        self.first_triangle.first().copied().unwrap_or(self.bounded)
+    }
+
     /// The mesh and triangle of primitive `prim` when it is a mesh triangle: from its id alone
     /// (what `prims` holds for it, without the cache miss of reading it in a large mesh).
     #[inline(always)]
@@ -288,7 +291,7 @@ impl Geometry {
         // interaction is not returned through memory from a call (written by the callee in
         // other pieces than the caller reads back), and no call is made.
         // (Only bounded objects have these shapes: a triangle's record is not read.)
-        let object = match hit.prim < self.bounded_objects {
+        let object = match hit.prim < self.bounded_objects() {
             true => self.prims.get(hit.prim as usize),
             false => None,
         };
@@ -526,7 +529,7 @@ mod tests {
                     _ => None,
                 };
                 assert_eq!(g.triangle(p), want, "{p}");
-                let object = p < g.bounded_objects;
+                let object = p < g.bounded_objects();
                 assert_eq!(
                     object,
                     matches!(g.prims.get(p as usize), Some(PrimRef::Object(_))) && p < g.bounded,

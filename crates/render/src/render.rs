@@ -165,12 +165,12 @@ pub fn render_pass_or_cancel(
                 let mut counts = Vec::with_capacity(rect.pixels());
                 // The radiance sums of the tile's pixels, in rows.
                 let mut radiance = vec![[0i128; 3]; rect.pixels()];
-                for (k, (x, y)) in points(&rect).enumerate() {
+                for (k, (x, y)) in rect.points().enumerate() {
                     runs.add_pixel((x, y), k, (first, last), &mut radiance, &mut stats);
                 }
                 runs.trace(&mut radiance, &mut stats);
                 let sampler = runs.sampler();
-                for ((x, y), sum) in points(&rect).zip(&radiance) {
+                for ((x, y), sum) in rect.points().zip(&radiance) {
                     sums.extend_from_slice(sum);
                     if !settings.aovs.is_empty() {
                         aov_pixel(
@@ -198,11 +198,6 @@ pub fn render_pass_or_cancel(
     Some(stats)
 }
 
-/// The pixels of `rect`, in rows.
-fn points(rect: &Window) -> impl Iterator<Item = (usize, usize)> + '_ {
-    (rect.y0..rect.y1).flat_map(move |y| (rect.x0..rect.x1).map(move |x| (x, y)))
-}
-
 /// Runs of samples of the tile's pixels (at most [`SAMPLE_QUEUE`] of one pixel each, never
 /// across a multiple of it, where a sampler's tables start over), gathered up to
 /// [`BATCH_RUNS`] at a time and handed to the integrator together, each with its own sampler:
@@ -215,8 +210,8 @@ struct Runs<'a> {
     integrator: &'a dyn Integrator,
     settings: &'a RenderSettings,
     filter: &'a FilterSampler,
-    /// One sampler per run (their tables are large: kept for the whole tile).
-    samplers: Box<[Sampler; BATCH_RUNS]>,
+    /// One sampler per run (their tables are large: kept by the worker from tile to tile).
+    samplers: Vec<Sampler>,
     /// Runs gathered, samples gathered.
     runs: usize,
     len: usize,
@@ -246,7 +241,7 @@ impl<'a> Runs<'a> {
             integrator,
             settings,
             filter,
-            samplers: Box::new(std::array::from_fn(|_| sampler.clone())),
+            samplers: vec![sampler.clone(); BATCH_RUNS],
             runs: 0,
             len: 0,
             rays: Box::new([Ray::new(Point3::ORIGIN, Vec3::X); BATCH_SAMPLES]),
@@ -340,7 +335,7 @@ impl<'a> Runs<'a> {
         self.integrator.radiance_batch(
             self.scene,
             batch,
-            &mut self.samplers[..],
+            &mut self.samplers,
             stats,
             &mut self.radiance[..n],
         );

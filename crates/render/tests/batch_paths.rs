@@ -6,6 +6,7 @@
 mod support;
 
 use candela_render::accel::AccelKind;
+use candela_render::camera::Camera;
 use candela_render::integrator::{Integrator, Path, SampleBatch, BATCH_RUNS, SAMPLE_QUEUE};
 use candela_render::light::{Components, Emission, Light, PointLight};
 use candela_render::material::{Dispersion, Distribution, Material, Microfacet, Model};
@@ -130,12 +131,7 @@ fn mixed_scene(spectral: bool) -> Scene {
         },
         Components::from_intensity(Rgb::splat(0.4)),
     ));
-    b.camera(base.camera);
-    let mut scene = b.build(AccelKind::Bvh);
-    if spectral {
-        scene.prepare_spectral();
-    }
-    scene
+    finish(b, base.camera, spectral)
 }
 
 /// The Cornell box with every delta surface `Path::delta_vertex` shades in a batch, and
@@ -243,23 +239,34 @@ fn delta_scene(spectral: bool, every: bool) -> Scene {
         Transform::translation(eye.to_vec()) * Transform::scaling(Vec3::new(0.05, 0.05, 0.05));
     b.add_shape(Shape::Sphere(Sphere::new(place)), inside, None);
     if every {
-        for (p, i) in [
-            (Point3::new(0.3, 0.8, 0.5), 0.6),
-            (Point3::new(-0.5, 0.2, 0.9), 0.3),
-            (Point3::new(0.0, 0.9, -0.6), 0.9),
-        ] {
-            b.add_light(Light::Point(
-                PointLight {
-                    position: p,
-                    intensity: Rgb::splat(i),
-                    spectrum: None,
-                    falloff: Default::default(),
-                },
-                Components::from_intensity(Rgb::splat(i)),
-            ));
-        }
+        add_point_lights(&mut b, [0.6, 0.3, 0.9]);
     }
-    b.camera(base.camera);
+    finish(b, base.camera, spectral)
+}
+
+/// Three point lights in the Cornell box, of these intensities.
+fn add_point_lights(b: &mut SceneBuilder, intensities: [f32; 3]) {
+    let positions = [
+        Point3::new(0.3, 0.8, 0.5),
+        Point3::new(-0.5, 0.2, 0.9),
+        Point3::new(0.0, 0.9, -0.6),
+    ];
+    for (p, i) in positions.into_iter().zip(intensities) {
+        b.add_light(Light::Point(
+            PointLight {
+                position: p,
+                intensity: Rgb::splat(i),
+                spectrum: None,
+                falloff: Default::default(),
+            },
+            Components::from_intensity(Rgb::splat(i)),
+        ));
+    }
+}
+
+/// The scene of `b` seen by `camera`, with its spectra prepared when `spectral`.
+fn finish(mut b: SceneBuilder, camera: Camera, spectral: bool) -> Scene {
+    b.camera(camera);
     let mut scene = b.build(AccelKind::Bvh);
     if spectral {
         scene.prepare_spectral();
@@ -278,27 +285,8 @@ fn delta_lit_scene(spectral: bool) -> Scene {
     for o in base.geometry.objects() {
         b.add_shape(o.shape.clone(), o.props.material, None);
     }
-    for (p, i) in [
-        (Point3::new(0.3, 0.8, 0.5), 0.4),
-        (Point3::new(-0.5, 0.2, 0.9), 0.2),
-        (Point3::new(0.0, 0.9, -0.6), 0.7),
-    ] {
-        b.add_light(Light::Point(
-            PointLight {
-                position: p,
-                intensity: Rgb::splat(i),
-                spectrum: None,
-                falloff: Default::default(),
-            },
-            Components::from_intensity(Rgb::splat(i)),
-        ));
-    }
-    b.camera(base.camera);
-    let mut scene = b.build(AccelKind::Bvh);
-    if spectral {
-        scene.prepare_spectral();
-    }
-    scene
+    add_point_lights(&mut b, [0.4, 0.2, 0.7]);
+    finish(b, base.camera, spectral)
 }
 
 /// Samples `first..last` of pixel (x, y) of a 32 × 32 image, traced as one queue and one by
