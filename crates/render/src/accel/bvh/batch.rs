@@ -31,22 +31,35 @@ impl Bvh {
         let mut rest = Vec::new();
         for &r in &self.flat {
             let kind = Kind::from_bits((r.meta >> KIND_SHIFT).wrapping_sub(1));
+            let n = (r.meta & COUNT_MASK) as usize;
+            if kind == Kind::Tri {
+                // Triangles: the vertices their blocks hold (what the single-ray test reads).
+                for k in 0..n {
+                    let (block, lane) = (&self.tris[r.child as usize + k / 4], k % 4);
+                    let v = block.v.map(|p| p.map(|axis| axis[lane]));
+                    prims.push(FlatPrim::Tri {
+                        v,
+                        id: block.id[lane],
+                    });
+                }
+                continue;
+            }
             let batchable = matches!(kind, Kind::Quad | Kind::Sphere | Kind::Box);
             if !batchable {
                 rest.push(r);
                 continue;
             }
             // Blocked leaves: their primitive ids, from the blocks' id lanes.
-            let n = (r.meta & COUNT_MASK) as usize;
             for k in 0..n {
                 let id = self.block_id(kind, r.child as usize + k / 4, k % 4);
                 prims.push(FlatPrim::of(geometry, id).expect("a batchable primitive"));
             }
         }
         prims.sort_by_key(|p| match *p {
-            FlatPrim::Quad { id, .. } | FlatPrim::Sphere { id, .. } | FlatPrim::Box { id, .. } => {
-                id
-            }
+            FlatPrim::Quad { id, .. }
+            | FlatPrim::Sphere { id, .. }
+            | FlatPrim::Box { id, .. }
+            | FlatPrim::Tri { id, .. } => id,
         });
         (prims, rest)
     }
@@ -95,6 +108,7 @@ impl Bvh {
                 level,
                 Closest {
                     prims: &self.flat_prims,
+                    triangles: self.flat_triangles,
                     rays,
                     hits,
                 },
@@ -161,6 +175,7 @@ impl Bvh {
                 level,
                 Any {
                     prims: &self.flat_prims,
+                    triangles: self.flat_triangles,
                     rays,
                 },
             );
@@ -219,6 +234,8 @@ const PACKET_LEVEL: SimdLevel = SimdLevel::Avx2;
 /// The closest-hit kernel: the primitives in id order, a strict `t < best`.
 struct Closest<'a> {
     prims: &'a [FlatPrim],
+    /// Some of `prims` are triangles.
+    triangles: bool,
     rays: &'a RayBatch,
     hits: &'a mut BatchHits,
 }
@@ -228,7 +245,7 @@ impl WideKernel for Closest<'_> {
 
     #[inline(always)]
     fn run<W: Wide>(self, w: W) {
-        let l = Lanes::new(w, self.rays);
+        let l = Lanes::new(w, self.rays, self.triangles);
         let mut best_t = w.load(&self.rays.tmax);
         let none = w.splat_bits(u32::MAX);
         let mut best_id = none;
@@ -271,6 +288,8 @@ impl WideKernel for Closest<'_> {
 /// The any-hit kernel: the lanes that hit any primitive, stopping once every active lane has.
 struct Any<'a> {
     prims: &'a [FlatPrim],
+    /// Some of `prims` are triangles.
+    triangles: bool,
     rays: &'a RayBatch,
 }
 
@@ -279,7 +298,7 @@ impl WideKernel for Any<'_> {
 
     #[inline(always)]
     fn run<W: Wide>(self, w: W) -> u32 {
-        let l = Lanes::new(w, self.rays);
+        let l = Lanes::new(w, self.rays, self.triangles);
         let tmax = w.load(&self.rays.tmax);
         let active = self.rays.active;
         let mut hit = 0u32;
@@ -524,5 +543,130 @@ mod tests {
                 "{n} primitives: {hits_seen} hits, {blocked_seen} blocked"
             );
         }
+    }
+
+    /// A small scene of triangles (a grid of integer vertices, a tilted fan, a sphere and a
+    /// parallelogram): a flat tree whose triangles go into the batches' lanes. Rays come from
+    /// every side (each axis of the sheared space, both signs) and many pass exactly through
+    /// grid edges and vertices (the test's f64 edge fallback).
+    #[test]
+    fn batches_of_triangles_get_the_single_ray_hits_at_every_simd_level() {
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for j in 0..3 {
+            for i in 0..3 {
+                let (x, y) = (i as f32 - 2.0, j as f32 - 2.0);
+                let base = positions.len() as u32;
+                positions.extend([
+                    Point3::new(x, y, 0.0),
+                    Point3::new(x + 1.0, y, 0.0),
+                    Point3::new(x + 1.0, y + 1.0, 0.0),
+                    Point3::new(x, y + 1.0, 0.0),
+                ]);
+                indices.push([base, base + 1, base + 2]);
+                indices.push([base, base + 2, base + 3]);
+            }
+        }
+        // A fan standing across the grid (both windings).
+        let c = positions.len() as u32;
+        positions.extend([
+            Point3::new(0.0, 0.0, 1.5),
+            Point3::new(1.5, 0.3, -1.0),
+            Point3::new(-1.2, 0.4, -1.0),
+            Point3::new(0.2, -1.6, -0.8),
+        ]);
+        indices.extend([[c, c + 1, c + 2], [c, c + 3, c + 2], [c + 1, c + 3, c]]);
+        let mesh = Mesh {
+            positions,
+            indices,
+            ..Mesh::default()
+        };
+        let props = SurfaceProps::default();
+        let objects = vec![
+            Object {
+                shape: Shape::Sphere(Sphere::new(
+                    Transform::translation(Vec3::new(0.5, 0.5, 0.7))
+                        * Transform::scaling(Vec3::new(0.4, 0.4, 0.4)),
+                )),
+                props,
+            },
+            Object {
+                shape: Shape::Parallelogram(
+                    Parallelogram::new(
+                        Point3::new(-1.0, -1.0, 0.5),
+                        Vec3::new(1.0, 0.0, 0.0),
+                        Vec3::new(0.0, 1.0, 0.2),
+                    )
+                    .unwrap(),
+                ),
+                props,
+            },
+        ];
+        let g = Geometry::new(objects, vec![mesh]);
+        let bvh = Bvh::build(&g, &build_prims(&g));
+        assert!(!bvh.flat.is_empty(), "a flat tree");
+        assert!(
+            bvh.flat_triangles && bvh.flat_rest.is_empty(),
+            "triangles in the lanes"
+        );
+        let levels = [SimdLevel::Sse, SimdLevel::Avx2, SimdLevel::Avx512];
+        let mut rng = Pcg32::new(7, 3);
+        let (mut hits_seen, mut on_edges, mut blocked_seen) = (0, 0, 0);
+        for k in 0..300 {
+            let mut rays = RayBatch::default();
+            for i in 0..BATCH {
+                let mut u = || rng.next_f32() * 2.0 - 1.0;
+                // Aimed at a grid vertex, an edge or anywhere, from any side.
+                let target = match (i + k) % 3 {
+                    0 => Point3::new((u() * 1.5 - 0.5).round(), (u() * 1.5 - 0.5).round(), 0.0),
+                    1 => Point3::new((u() * 1.5 - 0.5).round(), u() * 1.5 - 0.5, 0.0),
+                    _ => Point3::new(u() * 1.5 - 0.5, u() * 1.5 - 0.5, u()),
+                };
+                let o = match (i + 2 * k) % 4 {
+                    // Along an axis (exact directions), or from anywhere.
+                    0 => target + Vec3::new(0.0, 0.0, 3.0 * u().signum()),
+                    1 => target + Vec3::new(3.0 * u().signum(), 0.0, 0.0),
+                    _ => Point3::new(u() * 4.0, u() * 4.0, u() * 4.0),
+                };
+                let mut ray = Ray::new(o, target - o);
+                if i % 6 == 5 {
+                    ray.tmax = 0.6 + u().abs();
+                }
+                if !(i * 5 + k).is_multiple_of(9) {
+                    rays.set(i, &ray);
+                }
+            }
+            for &level in &levels {
+                let mut st = RayStats::default();
+                let mut hits = [None; BATCH];
+                bvh.intersect_batch_at(level, &g, &rays, &mut hits, &mut st);
+                let occluded = bvh.occluded_batch_at(level, &g, &rays, &mut st);
+                for i in 0..BATCH {
+                    if rays.active >> i & 1 == 0 {
+                        assert!(hits[i].is_none() && occluded >> i & 1 == 0);
+                        continue;
+                    }
+                    let ray = rays.ray(i);
+                    let single = bvh.intersect(&g, &ray, &mut st);
+                    let blocked = bvh.occluded(&g, &ray, &mut st);
+                    assert_eq!(hits[i], single, "{level:?}, batch {k}, lane {i}: {ray:?}");
+                    assert_eq!(
+                        occluded >> i & 1 == 1,
+                        blocked,
+                        "{level:?}, batch {k}, lane {i}"
+                    );
+                    hits_seen += single.is_some() as usize;
+                    blocked_seen += blocked as usize;
+                    on_edges += single.is_some_and(|h| {
+                        h.prim >= 2
+                            && (h.uv[0] == 0.0 || h.uv[1] == 0.0 || h.uv[0] + h.uv[1] == 1.0)
+                    }) as usize;
+                }
+            }
+        }
+        assert!(
+            hits_seen > 5000 && blocked_seen > 5000 && on_edges > 300,
+            "{hits_seen} hits, {blocked_seen} blocked, {on_edges} on triangle edges"
+        );
     }
 }

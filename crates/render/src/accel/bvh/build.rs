@@ -3,6 +3,7 @@
 
 use rayon::prelude::*;
 
+use super::lanes::FlatPrim;
 use super::layout::{BvhNode, Kind, Ref, COUNT_MASK, KINDS, KIND_SHIFT, MEDIAN_DEPTH, W};
 use super::Bvh;
 use crate::accel::BuildPrim;
@@ -68,6 +69,10 @@ impl Bvh {
         bvh.flat = bvh.flat_root();
         if !bvh.flat.is_empty() {
             (bvh.flat_prims, bvh.flat_rest) = bvh.flat_split(geometry);
+            bvh.flat_triangles = bvh
+                .flat_prims
+                .iter()
+                .any(|p| matches!(p, FlatPrim::Tri { .. }));
         }
         bvh
     }

@@ -1,14 +1,18 @@
-//! Lane-exact sixteen-lane tests of parallelograms, spheres and boxes ([`crate::simd::Wide`]):
-//! one primitive against sixteen rays, each lane performing exactly the operations of the
-//! shape's scalar test in the same order (as the four-primitive blocks of
+//! Lane-exact sixteen-lane tests of parallelograms, spheres, boxes and triangles
+//! ([`crate::simd::Wide`]): one primitive against sixteen rays, each lane performing exactly
+//! the operations of the shape's scalar test in the same order (as the four-primitive blocks of
 //! [`crate::accel::blocks`] do), so that `t`, the surface parameters and the face are bit for
-//! bit the single-ray ones. Used by small scenes' batches ([`super::batch`]) and by packets at
-//! leaves of these primitives ([`super::packet`]).
+//! bit the single-ray ones. Used by small scenes' batches ([`super::batch`]) and, but for
+//! triangles, by packets at leaves of these primitives ([`super::packet`]).
+//!
+//! The watertight triangle test permutes each ray's axes its own way ([`ShearedRay::axes`](crate::shape::ShearedRay::axes)):
+//! the lanes' permuted origins and shears are made once per batch ([`Shear`]), and each
+//! triangle's vertex coordinates are picked per lane by two selects.
 
 use super::layout::{BOX_LEAF, COUNT_MASK, QUAD_LEAF, SPHERE_LEAF};
 use super::Bvh;
 use crate::geometry::{Geometry, PrimRef as GeomPrim};
-use crate::math::RayBatch;
+use crate::math::{RayBatch, BATCH};
 use crate::shape::Shape;
 use crate::simd::Wide;
 
@@ -39,6 +43,13 @@ pub(crate) enum FlatPrim {
     Box {
         /// Inverse placement, rows.
         inv: [[f32; 4]; 3],
+        /// Primitive id.
+        id: u32,
+    },
+    /// A mesh triangle: its vertices, as its block of the tree holds them.
+    Tri {
+        /// Vertices: `v[vertex][axis]`.
+        v: [[f32; 3]; 3],
         /// Primitive id.
         id: u32,
     },
@@ -108,16 +119,99 @@ pub(super) struct Lanes<W: Wide> {
     pub(super) o: [W::V; 3],
     pub(super) d: [W::V; 3],
     pub(super) tmin: W::V,
+    /// What the triangle test needs (made only for primitive lists with triangles).
+    pub(super) shear: Option<Shear<W>>,
 }
 
 impl<W: Wide> Lanes<W> {
+    /// The lanes of `r`, with their [`Shear`] when `triangles`.
     #[inline(always)]
-    pub(super) fn new(w: W, r: &RayBatch) -> Self {
+    pub(super) fn new(w: W, r: &RayBatch, triangles: bool) -> Self {
         Self {
             o: [w.load(&r.o[0]), w.load(&r.o[1]), w.load(&r.o[2])],
             d: [w.load(&r.d[0]), w.load(&r.d[1]), w.load(&r.d[2])],
             tmin: w.load(&r.tmin),
+            shear: triangles.then(|| Shear::new(w, r)),
         }
+    }
+}
+
+/// Each lane's ray as the watertight triangle test sees it ([`ShearedRay`](crate::shape::ShearedRay)): which of its
+/// axes become x, y and z (as masks: the axis is 0, the axis is 1, else 2), its origin on
+/// those axes and its shear, with the quotients of [`ShearedRay::new`](crate::shape::ShearedRay::new).
+pub(super) struct Shear<W: Wide> {
+    /// For x, y and z of the sheared space: the lanes whose axis is 0, and those whose axis
+    /// is 1.
+    axis: [(W::M, W::M); 3],
+    /// The origin's coordinates on the permuted axes.
+    o: [W::V; 3],
+    /// d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz].
+    s: [W::V; 3],
+    /// The lanes made (the active ones).
+    active: u32,
+}
+
+impl<W: Wide> Shear<W> {
+    /// The shear of every lane of `r`: [`ShearedRay::new`](crate::shape::ShearedRay::new)'s choice of axes (the table of
+    /// [`ShearedRay::axes`](crate::shape::ShearedRay::axes) as masks) and quotients.
+    #[inline(always)]
+    fn new(w: W, r: &RayBatch) -> Self {
+        let all = w.mask(u32::MAX);
+        let not = |m: W::M| w.and_not(all, m);
+        let d = [w.load(&r.d[0]), w.load(&r.d[1]), w.load(&r.d[2])];
+        let o = [w.load(&r.o[0]), w.load(&r.o[1]), w.load(&r.o[2])];
+        let one = w.splat(1.0);
+        let a = [
+            w.copysign(d[0], one),
+            w.copysign(d[1], one),
+            w.copysign(d[2], one),
+        ];
+        let x_over_y = w.gt(a[0], a[1]);
+        let m = w.select(x_over_y, a[0], a[1]);
+        let dm = w.select(x_over_y, d[0], d[1]);
+        let over_z = w.gt(m, a[2]);
+        // z is axis 0, 1 or 2; x and y swap when d[kz] < 0.
+        let z0 = w.and(over_z, x_over_y);
+        let z1 = w.and_not(over_z, x_over_y);
+        let z2 = not(over_z);
+        let dz = w.select(over_z, dm, d[2]);
+        let neg = w.lt(dz, w.splat(0.0));
+        let pos = not(neg);
+        let axis = [
+            (
+                w.or(w.and(z1, neg), w.and(z2, pos)),
+                w.or(w.and(z0, pos), w.and(z2, neg)),
+            ),
+            (
+                w.or(w.and(z1, pos), w.and(z2, neg)),
+                w.or(w.and(z0, neg), w.and(z2, pos)),
+            ),
+            (z0, z1),
+        ];
+        let pick = |v: &[W::V; 3], (is0, is1): (W::M, W::M)| {
+            w.select(is0, v[0], w.select(is1, v[1], v[2]))
+        };
+        Self {
+            axis,
+            o: [pick(&o, axis[0]), pick(&o, axis[1]), pick(&o, axis[2])],
+            s: [
+                w.div(pick(&d, axis[0]), dz),
+                w.div(pick(&d, axis[1]), dz),
+                w.div(one, dz),
+            ],
+            active: r.active,
+        }
+    }
+
+    /// Coordinate `a` (0: x, 1: y, 2: z of the sheared space) of point `p`, lane by lane.
+    #[inline(always)]
+    fn pick(&self, w: W, p: &[f32; 3], a: usize) -> W::V {
+        let (is0, is1) = self.axis[a];
+        w.select(
+            is0,
+            w.splat(p[0]),
+            w.select(is1, w.splat(p[1]), w.splat(p[2])),
+        )
     }
 }
 
@@ -292,6 +386,75 @@ fn cube<W: Wide>(w: W, l: &Lanes<W>, tmax: W::V, inv: &[[f32; 4]; 3]) -> LaneHit
     }
 }
 
+/// [`crate::shape::intersect_triangle`] on every lane (`u`, `v`: the barycentrics of the
+/// second and third vertices).
+#[inline(always)]
+fn triangle<W: Wide>(w: W, l: &Lanes<W>, tmax: W::V, v: &[[f32; 3]; 3]) -> LaneHit<W> {
+    let zero = w.splat(0.0);
+    let Some(sh) = &l.shear else {
+        // Not reached: lists with triangles come with their shear.
+        return LaneHit {
+            valid: w.mask(0),
+            t: zero,
+            u: zero,
+            v: zero,
+            face: zero,
+        };
+    };
+    let [sx, sy, sz] = sh.s;
+    // The vertices translated to the origin, on the permuted axes, and sheared.
+    // (Written out: closures here would not be compiled for the kernel's instruction set.)
+    let (za, zb, zc) = (
+        w.sub(sh.pick(w, &v[0], 2), sh.o[2]),
+        w.sub(sh.pick(w, &v[1], 2), sh.o[2]),
+        w.sub(sh.pick(w, &v[2], 2), sh.o[2]),
+    );
+    let ax = w.sub(w.sub(sh.pick(w, &v[0], 0), sh.o[0]), w.mul(sx, za));
+    let bx = w.sub(w.sub(sh.pick(w, &v[1], 0), sh.o[0]), w.mul(sx, zb));
+    let cx = w.sub(w.sub(sh.pick(w, &v[2], 0), sh.o[0]), w.mul(sx, zc));
+    let ay = w.sub(w.sub(sh.pick(w, &v[0], 1), sh.o[1]), w.mul(sy, za));
+    let by = w.sub(w.sub(sh.pick(w, &v[1], 1), sh.o[1]), w.mul(sy, zb));
+    let cy = w.sub(w.sub(sh.pick(w, &v[2], 1), sh.o[1]), w.mul(sy, zc));
+    let mut u = w.sub(w.mul(cx, by), w.mul(cy, bx));
+    let mut vv = w.sub(w.mul(ax, cy), w.mul(ay, cx));
+    let mut ww = w.sub(w.mul(bx, ay), w.mul(by, ax));
+    let on_edge = w.bits(w.or(w.or(w.eq(u, zero), w.eq(vv, zero)), w.eq(ww, zero))) & sh.active;
+    if on_edge != 0 {
+        // On an edge, f32 cannot decide the sign: the edge functions in f64, for those lanes
+        // (as the single-ray test).
+        let f = |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
+        let mut lanes = [[0f32; BATCH]; 9];
+        for (dst, src) in lanes.iter_mut().zip([u, vv, ww, ax, ay, bx, by, cx, cy]) {
+            w.store(src, dst);
+        }
+        let [mut uu, mut v2, mut w2, ax, ay, bx, by, cx, cy] = lanes;
+        for i in crate::math::lanes(on_edge) {
+            uu[i] = f(cx[i], by[i], cy[i], bx[i]);
+            v2[i] = f(ax[i], cy[i], ay[i], cx[i]);
+            w2[i] = f(bx[i], ay[i], by[i], ax[i]);
+        }
+        (u, vv, ww) = (w.load(&uu), w.load(&v2), w.load(&w2));
+    }
+    let neg = w.or(w.or(w.lt(u, zero), w.lt(vv, zero)), w.lt(ww, zero));
+    let pos = w.or(w.or(w.gt(u, zero), w.gt(vv, zero)), w.gt(ww, zero));
+    let det = w.add(w.add(u, vv), ww);
+    let t_scaled = w.add(
+        w.add(w.mul(u, w.mul(sz, za)), w.mul(vv, w.mul(sz, zb))),
+        w.mul(ww, w.mul(sz, zc)),
+    );
+    let inv_det = w.div(w.splat(1.0), det);
+    let t = w.mul(t_scaled, inv_det);
+    let inside = w.and_not(w.ne(det, zero), w.and(neg, pos));
+    let valid = w.and(inside, w.and(w.gt(t, l.tmin), w.lt(t, tmax)));
+    LaneHit {
+        valid,
+        t,
+        u: w.mul(vv, inv_det),
+        v: w.mul(ww, inv_det),
+        face: zero,
+    }
+}
+
 /// The test of one primitive on every lane.
 #[inline(always)]
 pub(super) fn test<W: Wide>(w: W, l: &Lanes<W>, tmax: W::V, p: &FlatPrim) -> (LaneHit<W>, u32) {
@@ -299,5 +462,6 @@ pub(super) fn test<W: Wide>(w: W, l: &Lanes<W>, tmax: W::V, p: &FlatPrim) -> (La
         FlatPrim::Quad { p, n, ds, dt, id } => (quad(w, l, tmax, (*p, *n, *ds, *dt)), *id),
         FlatPrim::Sphere { inv, id } => (sphere(w, l, tmax, inv), *id),
         FlatPrim::Box { inv, id } => (cube(w, l, tmax, inv), *id),
+        FlatPrim::Tri { v, id } => (triangle(w, l, tmax, v), *id),
     }
 }

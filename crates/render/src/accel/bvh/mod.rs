@@ -72,10 +72,13 @@ pub struct Bvh {
     /// When every child of the root is a leaf (small scenes): those leaves, tested one after
     /// the other without box tests or a stack.
     flat: Vec<Ref>,
-    /// For batches of rays through a flat tree: its parallelograms, spheres and boxes in id
-    /// order (tested sixteen rays at a time), and its other leaves (tested ray by ray).
+    /// For batches of rays through a flat tree: its parallelograms, spheres, boxes and
+    /// triangles in id order (tested sixteen rays at a time), and its other leaves (tested
+    /// ray by ray).
     flat_prims: Vec<FlatPrim>,
     flat_rest: Vec<Ref>,
+    /// Some of `flat_prims` are triangles (the batch then makes the rays' shears).
+    flat_triangles: bool,
     /// Primitive ids in leaf order (other leaves index it).
     ids: Vec<u32>,
 }
@@ -92,6 +95,7 @@ impl Default for Bvh {
             flat: Vec::new(),
             flat_prims: Vec::new(),
             flat_rest: Vec::new(),
+            flat_triangles: false,
             ids: Vec::new(),
         }
     }

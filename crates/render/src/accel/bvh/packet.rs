@@ -324,7 +324,12 @@ impl<Q: PacketQuery> WideKernel for Packet<'_, Q> {
         let sz = w.div(one, d[kz]);
         let (ox, oy, oz) = (o[kx], o[ky], o[kz]);
         let tmin = w.load(&r.tmin);
-        let lanes = Lanes { o, d, tmin };
+        let lanes = Lanes {
+            o,
+            d,
+            tmin,
+            shear: None,
+        };
         let mut tmax_lanes = r.tmax;
         let mut tmax = w.load(&tmax_lanes);
         let far_scale = w.splat(FAR_SCALE);
