@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::math::{Bounds3, Frame, Ray, Transform};
-use crate::shape::{LocalGeometry, Mesh, Shape, ShapeHit, ShearedRay};
+use crate::shape::{Face, LocalGeometry, Mesh, Shape, ShapeHit, ShearedRay};
 
 /// Geometries of at least this many primitives prefetch what shading their hits reads
 /// ([`Geometry::prefetch_interactions`]); smaller ones stay in the caches.
@@ -67,6 +67,8 @@ pub struct Geometry {
     /// order): a hit's triangle is found from its id without reading `prims`
     /// ([`Geometry::triangle`]).
     first_triangle: Vec<u32>,
+    /// Each mesh's [`Face`]s, when it keeps them ([`Mesh::faces`]; empty otherwise).
+    faces: Vec<Vec<Face>>,
     /// Shared groups (each without instances of its own).
     groups: Vec<Arc<Geometry>>,
     /// The bounds of each group, in its space.
@@ -122,12 +124,17 @@ impl Geometry {
         }
         let n = prims.len() as u32;
         prims.extend(unbounded.into_iter().map(PrimRef::Object));
+        let faces = meshes
+            .iter()
+            .map(|m| m.faces().unwrap_or_default())
+            .collect();
         Self {
             objects,
             meshes,
             prims,
             bounded: n,
             first_triangle,
+            faces,
             groups: Vec::new(),
             group_bounds: Vec::new(),
             instances: Vec::new(),
@@ -189,6 +196,23 @@ impl Geometry {
     /// The meshes.
     pub fn meshes(&self) -> &[Mesh] {
         &self.meshes
+    }
+
+    /// [`Mesh::geometry`] of triangle `tri` of mesh `mesh` at barycentrics (β, γ), with its
+    /// shading frame when the triangle keeps it ready ([`Face`]).
+    #[inline(always)]
+    pub fn mesh_geometry(
+        &self,
+        mesh: u32,
+        tri: u32,
+        beta: f32,
+        gamma: f32,
+    ) -> (LocalGeometry, Option<Frame>) {
+        let m = &self.meshes[mesh as usize];
+        match self.faces[mesh as usize].get(tri as usize) {
+            Some(f) => (m.geometry_of_face(tri, beta, gamma, f), Some(f.frame)),
+            None => (m.geometry_inline(tri, beta, gamma), None),
+        }
     }
 
     /// What primitive `prim` is.
@@ -324,9 +348,8 @@ impl Geometry {
             leaf: hit.leaf,
         };
         if let Some((mesh, tri)) = self.triangle(hit.prim) {
-            let m = &self.meshes[mesh as usize];
-            let g = m.geometry_inline(tri, hit.uv[0], hit.uv[1]);
-            return surface_interaction(ray, hit, g, m.props, None);
+            let (g, frame) = self.mesh_geometry(mesh, tri, hit.uv[0], hit.uv[1]);
+            return surface_interaction(ray, hit, g, self.meshes[mesh as usize].props, frame);
         }
         let Some(&prim) = self.prims.get(hit.prim as usize) else {
             return self.instance_interaction(ray, hit);
@@ -353,8 +376,8 @@ impl Geometry {
                 }
             }
             PrimRef::Triangle { mesh, tri } => {
-                let m = &self.meshes[mesh as usize];
-                (m.geometry_inline(tri, hit.uv[0], hit.uv[1]), m.props, None)
+                let (g, frame) = self.mesh_geometry(mesh, tri, hit.uv[0], hit.uv[1]);
+                (g, self.meshes[mesh as usize].props, frame)
             }
         };
         surface_interaction(ray, hit, g, props, frame)

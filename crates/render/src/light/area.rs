@@ -160,7 +160,7 @@ impl AreaLight {
             AreaShape::Mesh { mesh, triangles } => {
                 let (tri, u0) = triangles.sample_discrete(u[0]);
                 let (b1, b2) = warp::square_to_uniform_triangle([u0, u[1]]);
-                geometry.meshes()[*mesh as usize].geometry(tri as u32, b1, b2)
+                geometry.mesh_geometry(*mesh, tri as u32, b1, b2).0
             }
         };
         Some((g, self.inv_area))

@@ -12,7 +12,26 @@
 
 use super::{LocalGeometry, ShapeHit};
 use crate::interaction::SurfaceProps;
-use crate::math::{Bounds3, Normal3, Point2, Point3, Ray};
+use crate::math::{Bounds3, Frame, Normal3, Point2, Point3, Ray, Vec3};
+
+/// Meshes of at most this many triangles keep their flat-shaded triangles' [`Face`]s ready;
+/// larger ones compute them at every hit (their faces would not stay in the caches).
+pub const FACE_TRIANGLES: usize = 4096;
+
+/// What a flat-shaded triangle (no vertex normals, or the same one at its three corners) keeps
+/// ready for its hits ([`Mesh::faces`]): the normals, ∂p/∂u and the shading frame, which do not
+/// vary over it. Only the point and the texture coordinates are computed at a hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Face {
+    /// The geometric normal (on the side of the shading normal).
+    pub n: Normal3,
+    /// The shading normal.
+    pub ns: Normal3,
+    /// ∂p/∂u.
+    pub dpdu: Vec3,
+    /// The shading frame of `ns` and `dpdu`.
+    pub frame: Frame,
+}
 
 /// A triangle mesh in world space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -206,6 +225,106 @@ impl Mesh {
             (uv, dpdu)
         };
         LocalGeometry { p, n, ns, uv, dpdu }
+    }
+
+    /// The [`Face`]s of a mesh of at most [`FACE_TRIANGLES`] triangles all flat-shaded (no
+    /// vertex normals, or the same one at the three corners of each triangle); `None` for
+    /// other meshes. A face gives what [`Mesh::geometry`] gives at every point of its
+    /// triangle, except that the shading normal of equal vertex normals is that normal rather
+    /// than their interpolation, renormalised at each point (equal up to round-off).
+    pub fn faces(&self) -> Option<Vec<Face>> {
+        if self.len() > FACE_TRIANGLES {
+            return None;
+        }
+        let flat = self.normals.is_empty()
+            || self.indices.iter().all(|t| {
+                let [a, b, c] = t.map(|i| self.normals.get(i as usize).copied());
+                a.is_some() && a == b && b == c
+            });
+        if !flat {
+            return None;
+        }
+        Some((0..self.len() as u32).map(|i| self.face(i)).collect())
+    }
+
+    /// The [`Face`] of flat-shaded triangle `i`: the normals, ∂p/∂u and frame of
+    /// [`Mesh::geometry`], with the same operations.
+    fn face(&self, i: u32) -> Face {
+        let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);
+        let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
+        let (e1, e2) = (b - a, c - a);
+        let mut n = e1.cross(e2).normalize().to_normal();
+        if !n.x.is_finite() {
+            n = Normal3::new(0.0, 0.0, 1.0);
+        }
+        let ns = match self.normals.get(ia) {
+            None => n,
+            Some(&s) => {
+                let len = s.to_vec().norm();
+                if len > 0.0 && len.is_finite() {
+                    s / len
+                } else {
+                    n
+                }
+            }
+        };
+        if !self.normals.is_empty() && n.dot_vec(ns.to_vec()) < 0.0 {
+            n = -n;
+        }
+        let dpdu = if self.uvs.is_empty() {
+            e1
+        } else {
+            let [ta, tb, tc] = [self.uvs[ia], self.uvs[ib], self.uvs[ic]];
+            let (du1, du2, dv1, dv2) = (tb.x - ta.x, tc.x - ta.x, tb.y - ta.y, tc.y - ta.y);
+            let det = du1 * dv2 - du2 * dv1;
+            if det.abs() > 1e-12 {
+                (e1 * dv2 - e2 * dv1) / det
+            } else {
+                e1
+            }
+        };
+        Face {
+            n,
+            ns,
+            dpdu,
+            frame: Frame::from_normal_tangent(ns, dpdu),
+        }
+    }
+
+    /// [`Mesh::geometry`] of flat-shaded triangle `i`, with its face `f`: only the point and
+    /// the texture coordinates are computed (with the same operations).
+    #[inline(always)]
+    pub(crate) fn geometry_of_face(
+        &self,
+        i: u32,
+        beta: f32,
+        gamma: f32,
+        f: &Face,
+    ) -> LocalGeometry {
+        let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);
+        let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
+        let alpha = 1.0 - beta - gamma;
+        let p = Point3::new(
+            alpha * a.x + beta * b.x + gamma * c.x,
+            alpha * a.y + beta * b.y + gamma * c.y,
+            alpha * a.z + beta * b.z + gamma * c.z,
+        );
+        let uv = if self.uvs.is_empty() {
+            Point2::new(beta, gamma)
+        } else {
+            let [ta, tb, tc] = [self.uvs[ia], self.uvs[ib], self.uvs[ic]];
+            Point2::new(
+                alpha * ta.x + beta * tb.x + gamma * tc.x,
+                alpha * ta.y + beta * tb.y + gamma * tc.y,
+            )
+        };
+        LocalGeometry {
+            p,
+            n: f.n,
+            ns: f.ns,
+            uv,
+            dpdu: f.dpdu,
+        }
     }
 
     /// The mesh moved by `t` (positions by `t`, normals by its inverse transpose).
@@ -438,5 +557,72 @@ mod tests {
         // Vertex normals pointing below flip the geometric normal to their side.
         m.normals = vec![Normal3::new(0.0, 0.0, -1.0); 3];
         assert_eq!(m.geometry(0, 0.2, 0.2).n, Normal3::new(0.0, 0.0, -1.0));
+    }
+
+    /// A flat-shaded triangle's face gives what the triangle's geometry gives at every point:
+    /// bit for bit without vertex normals, the same normal (up to round-off) with three equal
+    /// ones; smooth and large meshes keep no faces.
+    #[test]
+    fn faces_give_the_geometry_of_flat_triangles() {
+        let mut rng = crate::sampling::Pcg32::new(5, 9);
+        let mut u = || rng.next_f32() * 4.0 - 2.0;
+        let mut m = Mesh::default();
+        for i in 0..20u32 {
+            m.positions
+                .extend((0..3).map(|_| Point3::new(u(), u(), u())));
+            m.uvs.extend((0..3).map(|_| Point2::new(u(), u())));
+            m.indices.push([3 * i, 3 * i + 2, 3 * i + 1]);
+        }
+        // A degenerate triangle and one with degenerate texture coordinates.
+        m.positions[3] = m.positions[4];
+        m.uvs[6] = m.uvs[7];
+        let mut rng = crate::sampling::Pcg32::new(6, 1);
+        let mut bary = || {
+            let (b, c) = (rng.next_f32(), rng.next_f32());
+            if b + c > 1.0 {
+                (1.0 - b, 1.0 - c)
+            } else {
+                (b, c)
+            }
+        };
+        for normals in [false, true] {
+            if normals {
+                // One normal per triangle, at its three corners (not unit length).
+                m.normals = (0..20)
+                    .flat_map(|i| {
+                        let n = Normal3::new(0.3 * i as f32 - 2.0, 1.5, -0.5);
+                        [n; 3]
+                    })
+                    .collect();
+            }
+            let faces = m.faces().expect("flat-shaded: faces");
+            for (i, f) in faces.iter().enumerate() {
+                for _ in 0..20 {
+                    let (b, c) = bary();
+                    let g = m.geometry(i as u32, b, c);
+                    let h = m.geometry_of_face(i as u32, b, c, f);
+                    assert_eq!(
+                        (g.p, g.uv, g.dpdu, g.n),
+                        (h.p, h.uv, h.dpdu, h.n),
+                        "triangle {i}"
+                    );
+                    if normals {
+                        assert!(g.ns.to_vec().approx_eq(h.ns.to_vec(), 1e-6), "triangle {i}");
+                    } else {
+                        assert_eq!(g.ns, h.ns);
+                    }
+                    assert_eq!(f.frame, Frame::from_normal_tangent(h.ns, h.dpdu));
+                }
+            }
+        }
+        // Smooth: no faces; nor for a mesh too large to keep them.
+        m.normals[1] = Normal3::new(0.0, 0.0, 1.0);
+        assert!(m.faces().is_none());
+        m.normals.clear();
+        let big = Mesh {
+            indices: vec![[0, 1, 2]; FACE_TRIANGLES + 1],
+            ..m.clone()
+        };
+        assert!(big.faces().is_none() && m.faces().is_some());
     }
 }
