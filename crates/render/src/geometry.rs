@@ -198,6 +198,15 @@ impl Geometry {
         &self.meshes
     }
 
+    /// The corners and [`Face`] of triangle `tri` of mesh `mesh`, when it keeps its face.
+    #[inline]
+    pub fn face(&self, mesh: u32, tri: u32) -> Option<([crate::math::Point3; 3], &Face)> {
+        let f = self.faces.get(mesh as usize)?.get(tri as usize)?;
+        let m = &self.meshes[mesh as usize];
+        let [a, b, c] = m.indices[tri as usize].map(|i| m.positions[i as usize]);
+        Some(([a, b, c], f))
+    }
+
     /// [`Mesh::geometry`] of triangle `tri` of mesh `mesh` at barycentrics (β, γ), with its
     /// shading frame when the triangle keeps it ready ([`Face`]).
     #[inline(always)]

@@ -289,6 +289,57 @@ fn delta_lit_scene(spectral: bool) -> Scene {
     finish(b, base.camera, spectral)
 }
 
+/// The Cornell box of `mixed_scene` made of triangle meshes: each parallelogram two triangles
+/// (its boxes and lights too), so that batches test triangles in their lanes and the Lambert
+/// lanes sample mesh lights. Flat-shaded meshes keep their faces: without vertex normals, with
+/// one normal at the corners (the ceiling light), with texture coordinates (the back wall);
+/// the small two-sided light is smooth-shaded (sampled by the light itself), and one checkered
+/// light is not uniform (likewise).
+fn mesh_scene(spectral: bool) -> Scene {
+    let base = mixed_scene(false);
+    let mut b = SceneBuilder::new();
+    for mat in &base.materials {
+        b.add_material(mat.clone());
+    }
+    for e in &base.emissions {
+        b.add_emission(e.clone());
+    }
+    for (i, o) in base.geometry.objects().iter().enumerate() {
+        let Shape::Parallelogram(q) = &o.shape else {
+            b.add_shape(o.shape.clone(), o.props.material, o.props.emission);
+            continue;
+        };
+        let mut mesh = Mesh {
+            positions: vec![q.p, q.p + q.v, q.p + q.v + q.w, q.p + q.w],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            ..Mesh::default()
+        };
+        mesh.props.material = o.props.material;
+        mesh.props.emission = o.props.emission;
+        let n = q.normal();
+        match (i, o.props.emission) {
+            (0, Some(_)) => mesh.normals = vec![n; 4],
+            (_, Some(_)) if i % 2 == 0 => {
+                // Smooth: its faces are not kept.
+                mesh.normals = vec![n, n, -n, n];
+            }
+            (3, None) => {
+                mesh.uvs = [(0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (0.0, 1.0)]
+                    .map(|(u, v)| candela_render::math::Point2::new(u, v))
+                    .to_vec()
+            }
+            _ => {}
+        }
+        b.add_mesh(mesh);
+    }
+    for l in &base.lights {
+        if matches!(l, Light::Point(..)) {
+            b.add_light(l.clone());
+        }
+    }
+    finish(b, base.camera, spectral)
+}
+
 /// Samples `first..last` of pixel (x, y) of a 32 × 32 image, traced as one queue and one by
 /// one: the same radiance and wavelengths, bit for bit.
 fn check(scene: &Scene, pixel: (usize, usize), range: (u32, u32), spp: u32) {
@@ -434,6 +485,24 @@ fn every_kind_of_vertex_in_a_batch_agrees_with_single_paths_in_rgb_and_spectral_
     for spectral in [false, true] {
         let scene = mixed_scene(spectral);
         assert!(scene.accel.refills_lanes());
+        for (pixel, range, spp) in [
+            ((16, 16), (0, 64), 64),
+            ((5, 20), (0, 64), 64),
+            ((25, 9), (3, 40), 64),
+            ((12, 28), (60, 100), 128),
+            ((28, 3), (0, 64), 64),
+            ((9, 9), (0, 64), 64),
+        ] {
+            check_in(&scene, pixel, range, spp, spectral);
+        }
+    }
+}
+
+#[test]
+fn cornell_box_meshes_agree_in_batches_and_alone_in_rgb_and_spectral_mode() {
+    for spectral in [false, true] {
+        let scene = mesh_scene(spectral);
+        assert!(scene.accel.refills_lanes() && scene.geometry.meshes().len() > 6);
         for (pixel, range, spp) in [
             ((16, 16), (0, 64), 64),
             ((5, 20), (0, 64), 64),

@@ -137,6 +137,12 @@ impl AreaLight {
         }
     }
 
+    /// 1 / the light's area: the area density of its samples (but a sphere's).
+    #[inline]
+    pub fn inv_area(&self) -> f32 {
+        self.inv_area
+    }
+
     /// A point on the light and its area density.
     fn sample_area(&self, geometry: &Geometry, u: [f32; 2]) -> Option<(LocalGeometry, f32)> {
         let g = match &self.shape {

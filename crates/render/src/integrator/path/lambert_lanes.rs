@@ -64,8 +64,11 @@ pub(super) struct LambertLanes {
     /// Lanes whose first light is a parallelogram of uniform radiance, sampled here: its
     /// corner, edges and unit normal (in the first light's `n`), 1/area, which of them emit on
     /// both sides, the light's numbers and the pick's probability (the radiance is in the
-    /// first light's `li`, the sampled point goes to its `at`).
+    /// first light's `li`, the sampled point goes to its `at`). Of those, the lanes of
+    /// `tri` sample a triangle of a mesh light instead: its corners are in `q_p`, `q_v` and
+    /// `q_w`, and 1/area is the mesh's.
     rect: u32,
+    tri: u32,
     q_p: [L; 3],
     q_v: [L; 3],
     q_w: [L; 3],
@@ -153,6 +156,19 @@ pub(super) enum LaneLight<'a> {
         /// The pick's probability.
         pick_pdf: f32,
     },
+    /// A triangle of a mesh light of uniform radiance (chosen by area with the light's first
+    /// number, which `u` holds rescaled), to sample here (the other fields as for `Rect`).
+    Tri {
+        /// The triangle's corners and its geometric normal ([`crate::shape::Face::n`]).
+        corners: [Point3; 3],
+        n: Normal3,
+        /// 1 / the mesh's area.
+        inv_area: f32,
+        radiance: &'a Texture,
+        two_sided: bool,
+        u: [f32; 2],
+        pick_pdf: f32,
+    },
 }
 
 /// What [`LambertLanes::finish`] gives for a lane: the path's next throughput and direction
@@ -196,8 +212,39 @@ impl LambertLanes {
             self.beta[k][i] = v.beta.0[k];
         }
         self.rect &= !bit;
+        self.tri &= !bit;
         self.two_sided &= !bit;
-        if let LaneLight::Rect {
+        if let LaneLight::Tri {
+            corners,
+            n,
+            inv_area,
+            radiance,
+            two_sided,
+            u,
+            pick_pdf,
+        } = v.light
+        {
+            let l = &mut self.lights[0];
+            l.light &= !bit;
+            l.delta &= !bit;
+            l.to_surface &= !bit;
+            l.to_point &= !bit;
+            self.rect |= bit;
+            self.tri |= bit;
+            if two_sided {
+                self.two_sided |= bit;
+            }
+            set3(&mut self.q_p, i, corners[0].to_vec());
+            set3(&mut self.q_v, i, corners[1].to_vec());
+            set3(&mut self.q_w, i, corners[2].to_vec());
+            set3(&mut l.n, i, n.to_vec());
+            self.inv_area[i] = inv_area;
+            let uv = Point2::new(0.0, 0.0);
+            put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
+            self.u_light[0][i] = u[0];
+            self.u_light[1][i] = u[1];
+            self.pick_pdf[i] = pick_pdf;
+        } else if let LaneLight::Rect {
             q,
             inv_area,
             radiance,
@@ -319,6 +366,7 @@ impl LambertLanes {
         for mask in [
             &mut self.flip,
             &mut self.rect,
+            &mut self.tri,
             &mut self.two_sided,
             &mut self.roulette,
         ] {
@@ -411,18 +459,24 @@ impl WideKernel for Shade<'_> {
         ];
 
         // Parallelogram lights sampled uniformly by area (`AreaLight::sample`): the point
-        // p + v·s + w·t, the direction to it, and the density per solid angle.
+        // p + v·s + w·t, the direction to it, and the density per solid angle. A triangle of
+        // a mesh light: the point of barycentrics (1 − √s, t·√s) (`square_to_uniform_triangle`)
+        // as `Mesh::geometry` interpolates it, α·a + β·b + γ·c.
         let rect = w.mask(x.rect);
+        let tri = w.mask(x.tri);
         let pos = [w.load(&x.p_x[0]), w.load(&x.p_x[1]), w.load(&x.p_x[2])];
         let ng = [w.load(&x.ng_x[0]), w.load(&x.ng_x[1]), w.load(&x.ng_x[2])];
         let (us, ut) = (w.load(&x.u_light[0]), w.load(&x.u_light[1]));
+        let su = w.sqrt(us);
+        let (b1, b2) = (w.sub(one, su), w.mul(ut, su));
+        let b0 = w.sub(w.sub(one, b1), b2);
         let l0 = &mut x.lights[0];
         let mut to = [zero; 3];
         for k in 0..3 {
-            let q = w.add(
-                w.add(w.load(&x.q_p[k]), w.mul(w.load(&x.q_v[k]), us)),
-                w.mul(w.load(&x.q_w[k]), ut),
-            );
+            let (qp, qv, qw) = (w.load(&x.q_p[k]), w.load(&x.q_v[k]), w.load(&x.q_w[k]));
+            let in_rect = w.add(w.add(qp, w.mul(qv, us)), w.mul(qw, ut));
+            let in_tri = w.add(w.add(w.mul(b0, qp), w.mul(b1, qv)), w.mul(b2, qw));
+            let q = w.select(tri, in_tri, in_rect);
             put(w, rect, q, &mut l0.at[k]);
             to[k] = w.sub(q, pos[k]);
         }
@@ -855,6 +909,15 @@ mod tests {
                     },
                     rng.next_f32(),
                 ),
+                2 if i % 8 == 6 => LaneLight::Tri {
+                    corners: [q.p, q.p + q.v, q.p + q.w],
+                    n: q.normal(),
+                    inv_area: 2.0 / q.area(),
+                    radiance: &textures[i].1,
+                    two_sided: i % 3 == 0,
+                    u: [rng.next_f32(), rng.next_f32()],
+                    pick_pdf: rng.next_f32(),
+                },
                 _ => LaneLight::Rect {
                     q,
                     inv_area: 1.0 / q.area(),

@@ -471,17 +471,36 @@ impl Path {
         u[0] = u0;
         let light = &lights[pick];
         if let Light::Area(a) = light {
-            if let AreaShape::Parallelogram(q) = &a.shape {
-                let e = &scene.emissions[a.emission as usize];
-                if e.radiance.is_constant() {
-                    return LaneLight::Rect {
-                        q,
-                        inv_area: 1.0 / a.area,
-                        radiance: &e.radiance,
-                        two_sided: e.two_sided,
-                        u,
-                        pick_pdf,
-                    };
+            let e = &scene.emissions[a.emission as usize];
+            if e.radiance.is_constant() {
+                match &a.shape {
+                    AreaShape::Parallelogram(q) => {
+                        return LaneLight::Rect {
+                            q,
+                            inv_area: 1.0 / a.area,
+                            radiance: &e.radiance,
+                            two_sided: e.two_sided,
+                            u,
+                            pick_pdf,
+                        };
+                    }
+                    // A mesh whose triangles keep their faces: the triangle chosen as
+                    // `AreaLight::sample` chooses it, the point left to the lanes.
+                    AreaShape::Mesh { mesh, triangles } => {
+                        let (tri, u0) = triangles.sample_discrete(u[0]);
+                        if let Some((corners, face)) = scene.geometry.face(*mesh, tri as u32) {
+                            return LaneLight::Tri {
+                                corners,
+                                n: face.n,
+                                inv_area: a.inv_area(),
+                                radiance: &e.radiance,
+                                two_sided: e.two_sided,
+                                u: [u0, u[1]],
+                                pick_pdf,
+                            };
+                        }
+                    }
+                    _ => {}
                 }
             }
         }
