@@ -304,6 +304,16 @@ impl Geometry {
         if prim < first || prim >= self.bounded {
             return None;
         }
+        if self.first_triangle.len() == 1 {
+            return Some((0, prim - first));
+        }
+        // A small geometry's records stay in the caches: reading one beats a search (whose
+        // branches a few meshes of different sizes make unpredictable).
+        if self.prims.len() < PREFETCH_PRIMS {
+            if let Some(&PrimRef::Triangle { mesh, tri }) = self.prims.get(prim as usize) {
+                return Some((mesh, tri));
+            }
+        }
         // The last mesh starting at or before `prim` (an empty mesh starts where the next one
         // does, and is passed over).
         let m = self.first_triangle.partition_point(|&f| f <= prim) - 1;
