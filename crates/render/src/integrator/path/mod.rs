@@ -329,6 +329,13 @@ impl Path {
                     ));
                 }
             }
+        } else {
+            // A delta BSDF samples no light, but passes over the light sample's pair: every
+            // vertex draws the same dimensions (light pair, lobe, direction pair, roulette),
+            // so the samples of a pixel at a depth read the same tables of the sampler
+            // instead of starting new ones three dimensions apart after a mirror.
+            sampler.skip_1d();
+            sampler.skip_1d();
         }
 
         // BSDF sampling continues the path.
@@ -380,6 +387,12 @@ impl Path {
             t.spectral(si.uv, w, crate::spectrum::RgbRole::Reflectance)
         };
         let frame = si.shading_frame();
+        // The light sample's pair, unread by a delta BSDF: passed over, so that every vertex
+        // at a depth draws from the same dimensions (see `Path::vertex`).
+        let light_pair = |sampler: &mut Sampler| {
+            sampler.skip_1d();
+            sampler.skip_1d();
+        };
         let (s, flip) = match &material.model {
             Model::Specular { reflectance }
             | Model::Conductor {
@@ -389,6 +402,7 @@ impl Path {
             } => {
                 let r = refl(reflectance, &st.lambda);
                 let (o, flip) = local_wo(&frame, material.two_sided, si.wo);
+                light_pair(sampler);
                 // The BSDF's numbers, unread by a mirror.
                 sampler.skip_1d();
                 sampler.skip_1d();
@@ -410,6 +424,7 @@ impl Path {
                 let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
                 // A dielectric is never two-sided.
                 let (o, _) = local_wo(&frame, false, si.wo);
+                light_pair(sampler);
                 let u = sampler.next_1d();
                 sampler.skip_1d();
                 sampler.skip_1d();
