@@ -33,16 +33,7 @@ impl Environment {
         let distribution = match &radiance {
             Texture::Image(t) if t.image.width() > 0 && t.image.height() > 0 => {
                 let (w, h) = (t.image.width(), t.image.height());
-                let mut f = Vec::with_capacity(w * h);
-                for y in 0..h {
-                    let sin = (PI * (y as f32 + 0.5) / h as f32).sin();
-                    for x in 0..w {
-                        let uv =
-                            Point2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
-                        f.push(radiance.eval(uv).luminance().max(0.0) * sin);
-                    }
-                }
-                Some(Distribution2D::new(&f, w, h))
+                Some(Distribution2D::new(&cell_maxima(&radiance, w, h), w, h))
             }
             _ => None,
         };
@@ -183,6 +174,41 @@ impl HemisphereLight {
     }
 }
 
+/// The sampling function of a `w` × `h` environment map: for each cell of the lat-long
+/// square, the largest luminance of the map's lookups at the cell's corners, edge midpoints and
+/// centre, times sin θ at its centre. A filtered lookup blends a bright pixel into the cells
+/// around it (half a pixel around a small sun is still bright), and an offset lookup moves
+/// pixels off the cells: a cell's value at its centre alone left such radiance to cells of
+/// sky-level density, whose rare samples were fireflies (the ratio of radiance to density
+/// reached 400 times its mean on a map with a 3-pixel sun; Mitsuba samples its bilinear
+/// interpolation itself). The lookups are made on the grid of half cells, each shared by the
+/// cells around it.
+fn cell_maxima(radiance: &Texture, w: usize, h: usize) -> Vec<f32> {
+    let lum = |i: usize, j: usize| {
+        let uv = Point2::new(
+            (i as f32 / (2 * w) as f32).min(crate::sampling::sampler::ONE_MINUS_EPSILON),
+            (j as f32 / (2 * h) as f32).min(1.0),
+        );
+        radiance.eval(uv).luminance().max(0.0)
+    };
+    let row = |j: usize| (0..=2 * w).map(|i| lum(i, j)).collect::<Vec<f32>>();
+    let mut f = Vec::with_capacity(w * h);
+    let mut top = row(0);
+    for y in 0..h {
+        let (mid, bottom) = (row(2 * y + 1), row(2 * y + 2));
+        let sin = (PI * (y as f32 + 0.5) / h as f32).sin();
+        for x in 0..w {
+            let mut m = 0f32;
+            for r in [&top, &mid, &bottom] {
+                m = m.max(r[2 * x]).max(r[2 * x + 1]).max(r[2 * x + 2]);
+            }
+            f.push(m * sin);
+        }
+        top = bottom;
+    }
+    f
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -241,5 +267,57 @@ mod tests {
         assert_eq!(h.diffuse_irradiance_over_pi(Vec3::Z), Rgb::splat(2.0));
         assert_eq!(h.diffuse_irradiance_over_pi(-Vec3::Z), Rgb::BLACK);
         assert_eq!(h.diffuse_irradiance_over_pi(Vec3::X), Rgb::splat(1.0));
+    }
+
+    /// The samples' density follows the radiance the bilinear lookup returns, a small sun's
+    /// half-pixel rim included (lookups offset as Mitsuba's maps are): the ratio of radiance
+    /// to density stays near its mean. (Densities from the cells' centres alone let it reach
+    /// 430 times its mean, a relative deviation of 3.7.)
+    #[test]
+    fn image_sampling_follows_the_filtered_radiance() {
+        use crate::texture::{Filter, ImageTexture, Wrap};
+        let (w, h) = (128usize, 64usize);
+        let mut img = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let (dy, dx) = (y as i64 - 15, x as i64 - 35);
+                let sun = dy * dy + dx * dx < 4;
+                let sky = 0.3 + 0.2 * (y as f32 / h as f32);
+                img.set(x, y, Rgb::splat(if sun { 300.0 } else { sky }));
+            }
+        }
+        let tex = Texture::Image(ImageTexture {
+            filter: Filter::Bilinear,
+            wrap: [Wrap::Repeat, Wrap::Clamp],
+            scale: [1.0, (h as f32 - 1.0) / h as f32],
+            offset: [0.0, 0.5 / h as f32],
+            image: Arc::new(img),
+        });
+        let e = Environment::new(tex, Transform::IDENTITY);
+        let mut rng = crate::sampling::Pcg32::new(2, 3);
+        let n = 100_000;
+        let (mut sum, mut sum2, mut max, mut off) = (0f64, 0f64, 0f64, 0);
+        for _ in 0..n {
+            let (d, l, pdf) = e
+                .sample([rng.next_f32(), rng.next_f32()], &Wavelengths::Rgb)
+                .unwrap();
+            // (The direction's coordinates, recomputed, may fall across a cell's edge.)
+            off += ((pdf - e.pdf(d)).abs() > 1e-3 * pdf) as usize;
+            let r = l.0[0] as f64 / pdf as f64;
+            sum += r;
+            sum2 += r * r;
+            max = max.max(r);
+        }
+        let mean = sum / n as f64;
+        let rel_std = (sum2 / n as f64 - mean * mean).sqrt() / mean;
+        assert!(
+            off < n / 1000,
+            "{off} densities differ from the direction's"
+        );
+        assert!(
+            max / mean < 4.0 && rel_std < 0.6,
+            "max/mean {}, relative deviation {rel_std}",
+            max / mean
+        );
     }
 }
