@@ -243,21 +243,31 @@ impl AreaLight {
                 let wi = frame
                     .to_world(warp::square_to_uniform_cone_narrow(u, one_minus_cos))
                     .normalize();
-                let ray = crate::math::Ray::new(p, wi);
-                let t = match sphere.crossings(&ray) {
-                    Some((t0, _)) if t0 > 0.0 => t0,
-                    // Round-off at the silhouette: take the tangent point.
-                    _ => (*c - p).dot(wi),
+                // Where the direction meets the sphere, in world space (the sphere is round
+                // there): along wi, the centre is at (c − p)·wi, the ray passes at h² =
+                // d² − ((c − p)·wi)² from it and enters √(r² − h²) before (the tangent point at
+                // the silhouette, where round-off may make r² − h² negative); the point is put
+                // back on the sphere along its normal.
+                let along = (*c - p).dot(wi);
+                let h2 = (d2 - along * along).max(0.0);
+                let t = along - (r * r - h2).max(0.0).sqrt();
+                let n = (p + wi * t - *c).normalize();
+                let q = *c + n * *r;
+                // A uniform radiance reads no texture coordinates.
+                let uv = if emission.radiance.is_constant() {
+                    crate::math::Point2::new(0.0, 0.0)
+                } else {
+                    let o = sphere.world_from_object.inv_point(q).to_vec();
+                    sphere.geometry_at(o / o.norm()).uv
                 };
-                let q = sphere.world_from_object.inv_point(ray.at(t)).to_vec();
-                let g = sphere.geometry_at(q / q.norm());
-                let li = emission.radiance_at(g.uv, g.n, -wi, lambda);
+                let n = n.to_normal();
+                let li = emission.radiance_at(uv, n, -wi, lambda);
                 return Some(LightSample {
                     wi,
                     li,
                     pdf: warp::uniform_cone_pdf_narrow(one_minus_cos),
                     delta: false,
-                    target: Target::Surface(g.p, g.n),
+                    target: Target::Surface(q, n),
                 });
             }
         }
