@@ -100,8 +100,13 @@ impl Environment {
                     return None;
                 }
                 let pdf = pdf_uv / (2.0 * PI * PI * st);
-                // The Jacobian of the world transform keeps solid angle for rotations.
-                Some((d, self.radiance(d, lambda), pdf))
+                // The Jacobian of the world transform keeps solid angle for rotations. The
+                // radiance at the sampled coordinates themselves (their direction's, up to
+                // round-off, without its arctangent and arccosine).
+                let l =
+                    self.radiance
+                        .spectral(Point2::new(uv[0], uv[1]), lambda, RgbRole::Emission);
+                Some((d, l, pdf))
             }
             None => {
                 let d = self

@@ -6,6 +6,9 @@ pub struct Distribution1D {
     func: Vec<f32>,
     cdf: Vec<f32>,
     integral: f32,
+    /// A guide table: entry g is the bin that holds g/n (n bins), from which a sample's bin
+    /// is found in a step or two instead of a binary search.
+    guide: Vec<u32>,
 }
 
 impl Distribution1D {
@@ -37,11 +40,21 @@ impl Distribution1D {
             }
         }
         cdf[n] = 1.0;
+        let guide = (0..n)
+            .map(|g| Self::search(&cdf, g as f32 / n as f32) as u32)
+            .collect();
         Self {
             func,
             cdf,
             integral,
+            guide,
         }
+    }
+
+    /// The last bin whose CDF start is ≤ u, by binary search.
+    fn search(cdf: &[f32], u: f32) -> usize {
+        let n = cdf.len() - 1;
+        cdf[1..n].partition_point(|&c| c <= u).min(n - 1)
     }
 
     /// Number of bins.
@@ -63,8 +76,13 @@ impl Distribution1D {
     #[inline]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
         let n = self.func.len();
-        // The last bin whose CDF start is ≤ u.
-        let i = self.cdf[1..n].partition_point(|&c| c <= u).min(n - 1);
+        // The last bin whose CDF start is ≤ u (`search`): from the guide entry of the bin
+        // below u's (which no round-off of u·n can put past it), forward.
+        let g = ((u * n as f32) as usize).min(n - 1).saturating_sub(1);
+        let mut i = self.guide[g] as usize;
+        while i < n - 1 && self.cdf[i + 1] <= u {
+            i += 1;
+        }
         let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
         let du = if hi > lo {
             ((u - lo) / (hi - lo)).clamp(0.0, super::sampler::ONE_MINUS_EPSILON)
@@ -157,6 +175,36 @@ mod tests {
         // All zero: uniform.
         let u = Distribution1D::new(&[0.0, 0.0]);
         assert!((u.discrete_pdf(1) - 0.5).abs() < 1e-6);
+    }
+
+    /// The guide table finds the bin the binary search finds, for every u near the bins'
+    /// edges and the guide's own, with zero bins and a few huge ones.
+    #[test]
+    fn the_guide_table_finds_the_searched_bin() {
+        let mut rng = crate::sampling::Pcg32::new(8, 1);
+        for n in [1usize, 2, 3, 7, 64, 257] {
+            let f: Vec<f32> = (0..n)
+                .map(|i| match i % 5 {
+                    0 => 0.0,
+                    1 => 1000.0 * rng.next_f32(),
+                    _ => rng.next_f32(),
+                })
+                .collect();
+            let d = Distribution1D::new(&f);
+            let mut us: Vec<f32> = (0..2000).map(|_| rng.next_f32()).collect();
+            for &c in &d.cdf {
+                us.extend([c, c.next_down(), c.next_up()]);
+            }
+            us.extend((0..=n).map(|g| g as f32 / n as f32));
+            for u in us.into_iter().filter(|u| (0.0..1.0).contains(u)) {
+                let i = d.sample_discrete(u).0;
+                assert_eq!(i, Distribution1D::search(&d.cdf, u), "{n} bins, u = {u}");
+                assert!(
+                    d.func[i] > 0.0 || f.iter().all(|&x| x == 0.0),
+                    "zero bin {i}"
+                );
+            }
+        }
     }
 
     #[test]
