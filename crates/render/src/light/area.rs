@@ -163,6 +163,8 @@ impl AreaLight {
                     Cube::face_point(face as u32, 2.0 * u0 - 1.0, 2.0 * u[1] - 1.0),
                 )
             }
+            // The path tracer's Lambert lanes repeat this for meshes whose triangles keep
+            // their faces (`integrator/path/lambert_lanes.rs`, `LaneLight::Tri`): change both.
             AreaShape::Mesh { mesh, triangles } => {
                 let (tri, u0) = triangles.sample_discrete(u[0]);
                 let (b1, b2) = warp::square_to_uniform_triangle([u0, u[1]]);
