@@ -480,19 +480,26 @@ fn small_scene_batches_refill_their_lanes_and_agree_with_single_paths() {
     }
 }
 
+/// A pixel (x, y), the samples `first..last` of it traced, and its sample count.
+type Queue = ((usize, usize), (u32, u32), u32);
+
+/// Pixels, sample ranges and sample counts of the Cornell boxes with every kind of vertex:
+/// full and partial queues, from the first sample and from later ones.
+const MIXED_SAMPLES: [Queue; 6] = [
+    ((16, 16), (0, 64), 64),
+    ((5, 20), (0, 64), 64),
+    ((25, 9), (3, 40), 64),
+    ((12, 28), (60, 100), 128),
+    ((28, 3), (0, 64), 64),
+    ((9, 9), (0, 64), 64),
+];
+
 #[test]
 fn every_kind_of_vertex_in_a_batch_agrees_with_single_paths_in_rgb_and_spectral_mode() {
     for spectral in [false, true] {
         let scene = mixed_scene(spectral);
         assert!(scene.accel.refills_lanes());
-        for (pixel, range, spp) in [
-            ((16, 16), (0, 64), 64),
-            ((5, 20), (0, 64), 64),
-            ((25, 9), (3, 40), 64),
-            ((12, 28), (60, 100), 128),
-            ((28, 3), (0, 64), 64),
-            ((9, 9), (0, 64), 64),
-        ] {
+        for (pixel, range, spp) in MIXED_SAMPLES {
             check_in(&scene, pixel, range, spp, spectral);
         }
     }
@@ -503,14 +510,7 @@ fn cornell_box_meshes_agree_in_batches_and_alone_in_rgb_and_spectral_mode() {
     for spectral in [false, true] {
         let scene = mesh_scene(spectral);
         assert!(scene.accel.refills_lanes() && scene.geometry.meshes().len() > 6);
-        for (pixel, range, spp) in [
-            ((16, 16), (0, 64), 64),
-            ((5, 20), (0, 64), 64),
-            ((25, 9), (3, 40), 64),
-            ((12, 28), (60, 100), 128),
-            ((28, 3), (0, 64), 64),
-            ((9, 9), (0, 64), 64),
-        ] {
+        for (pixel, range, spp) in MIXED_SAMPLES {
             check_in(&scene, pixel, range, spp, spectral);
         }
     }

@@ -178,53 +178,91 @@ impl Mesh {
     /// the surface went through memory in other pieces than the caller read back).
     #[inline(always)]
     pub(crate) fn geometry_inline(&self, i: u32, beta: f32, gamma: f32) -> LocalGeometry {
-        let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);
-        let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
+        let (ix, [a, b, c]) = self.corners(i);
+        let (p, uv) = self.point_and_uv(ix, [a, b, c], beta, gamma);
+        let (e1, e2) = (b - a, c - a);
+        let n = winding_normal(e1, e2);
+        let ns = if self.normals.is_empty() {
+            n
+        } else {
+            let alpha = 1.0 - beta - gamma;
+            let [ia, ib, ic] = ix;
+            unit_or(
+                self.normals[ia] * alpha + self.normals[ib] * beta + self.normals[ic] * gamma,
+                n,
+            )
+        };
+        LocalGeometry {
+            p,
+            n: self.on_side_of(n, ns),
+            ns,
+            uv,
+            dpdu: self.dpdu(ix, e1, e2),
+        }
+    }
+
+    /// The indices and positions of triangle `i`'s corners.
+    #[inline(always)]
+    fn corners(&self, i: u32) -> ([usize; 3], [Point3; 3]) {
+        let ix = self.indices[i as usize].map(|x| x as usize);
+        (ix, ix.map(|k| self.positions[k]))
+    }
+
+    /// The point and texture coordinates at barycentrics (β, γ) of the triangle with corners
+    /// `ix` at `[a, b, c]`: (β, γ) themselves without texture coordinates.
+    #[inline(always)]
+    fn point_and_uv(
+        &self,
+        ix: [usize; 3],
+        [a, b, c]: [Point3; 3],
+        beta: f32,
+        gamma: f32,
+    ) -> (Point3, Point2) {
         let alpha = 1.0 - beta - gamma;
         let p = Point3::new(
             alpha * a.x + beta * b.x + gamma * c.x,
             alpha * a.y + beta * b.y + gamma * c.y,
             alpha * a.z + beta * b.z + gamma * c.z,
         );
-        let (e1, e2) = (b - a, c - a);
-        let mut n = e1.cross(e2).normalize().to_normal();
-        if !n.x.is_finite() {
-            n = Normal3::new(0.0, 0.0, 1.0);
-        }
-        let ns = if self.normals.is_empty() {
-            n
+        let uv = if self.uvs.is_empty() {
+            Point2::new(beta, gamma)
         } else {
-            let s = self.normals[ia] * alpha + self.normals[ib] * beta + self.normals[ic] * gamma;
-            let len = s.to_vec().norm();
-            if len > 0.0 && len.is_finite() {
-                s / len
-            } else {
-                n
-            }
-        };
-        // The geometric normal follows the winding, but agrees with the shading normal's side.
-        if !self.normals.is_empty() && n.dot_vec(ns.to_vec()) < 0.0 {
-            n = -n;
-        }
-        let (uv, dpdu) = if self.uvs.is_empty() {
-            (Point2::new(beta, gamma), e1)
-        } else {
-            let [ta, tb, tc] = [self.uvs[ia], self.uvs[ib], self.uvs[ic]];
-            let uv = Point2::new(
+            let [ta, tb, tc] = ix.map(|k| self.uvs[k]);
+            Point2::new(
                 alpha * ta.x + beta * tb.x + gamma * tc.x,
                 alpha * ta.y + beta * tb.y + gamma * tc.y,
-            );
-            // Solve [e1 e2] = [dpdu dpdv]·[[du1 du2],[dv1 dv2]] for dpdu.
-            let (du1, du2, dv1, dv2) = (tb.x - ta.x, tc.x - ta.x, tb.y - ta.y, tc.y - ta.y);
-            let det = du1 * dv2 - du2 * dv1;
-            let dpdu = if det.abs() > 1e-12 {
-                (e1 * dv2 - e2 * dv1) / det
-            } else {
-                e1
-            };
-            (uv, dpdu)
+            )
         };
-        LocalGeometry { p, n, ns, uv, dpdu }
+        (p, uv)
+    }
+
+    /// The geometric normal `n` (following the winding) turned to the side of the shading
+    /// normal `ns` when the mesh has vertex normals.
+    #[inline(always)]
+    fn on_side_of(&self, n: Normal3, ns: Normal3) -> Normal3 {
+        if !self.normals.is_empty() && n.dot_vec(ns.to_vec()) < 0.0 {
+            -n
+        } else {
+            n
+        }
+    }
+
+    /// ∂p/∂u of the triangle with corners `ix` and edges `e1`, `e2`: `e1` without texture
+    /// coordinates (or with degenerate ones).
+    #[inline(always)]
+    fn dpdu(&self, ix: [usize; 3], e1: Vec3, e2: Vec3) -> Vec3 {
+        if self.uvs.is_empty() {
+            return e1;
+        }
+        let [ta, tb, tc] = ix.map(|k| self.uvs[k]);
+        // Solve [e1 e2] = [dpdu dpdv]·[[du1 du2],[dv1 dv2]] for dpdu.
+        let (du1, du2, dv1, dv2) = (tb.x - ta.x, tc.x - ta.x, tb.y - ta.y, tc.y - ta.y);
+        let det = du1 * dv2 - du2 * dv1;
+        if det.abs() > 1e-12 {
+            (e1 * dv2 - e2 * dv1) / det
+        } else {
+            e1
+        }
     }
 
     /// The [`Face`]s of a mesh of at most [`FACE_TRIANGLES`] triangles all flat-shaded (no
@@ -250,41 +288,13 @@ impl Mesh {
     /// The [`Face`] of flat-shaded triangle `i`: the normals, ∂p/∂u and frame of
     /// [`Mesh::geometry`], with the same operations.
     fn face(&self, i: u32) -> Face {
-        let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);
-        let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
+        let (ix, [a, b, c]) = self.corners(i);
         let (e1, e2) = (b - a, c - a);
-        let mut n = e1.cross(e2).normalize().to_normal();
-        if !n.x.is_finite() {
-            n = Normal3::new(0.0, 0.0, 1.0);
-        }
-        let ns = match self.normals.get(ia) {
-            None => n,
-            Some(&s) => {
-                let len = s.to_vec().norm();
-                if len > 0.0 && len.is_finite() {
-                    s / len
-                } else {
-                    n
-                }
-            }
-        };
-        if !self.normals.is_empty() && n.dot_vec(ns.to_vec()) < 0.0 {
-            n = -n;
-        }
-        let dpdu = if self.uvs.is_empty() {
-            e1
-        } else {
-            let [ta, tb, tc] = [self.uvs[ia], self.uvs[ib], self.uvs[ic]];
-            let (du1, du2, dv1, dv2) = (tb.x - ta.x, tc.x - ta.x, tb.y - ta.y, tc.y - ta.y);
-            let det = du1 * dv2 - du2 * dv1;
-            if det.abs() > 1e-12 {
-                (e1 * dv2 - e2 * dv1) / det
-            } else {
-                e1
-            }
-        };
+        let n = winding_normal(e1, e2);
+        let ns = self.normals.get(ix[0]).map_or(n, |&s| unit_or(s, n));
+        let dpdu = self.dpdu(ix, e1, e2);
         Face {
-            n,
+            n: self.on_side_of(n, ns),
             ns,
             dpdu,
             frame: Frame::from_normal_tangent(ns, dpdu),
@@ -301,23 +311,8 @@ impl Mesh {
         gamma: f32,
         f: &Face,
     ) -> LocalGeometry {
-        let [ia, ib, ic] = self.indices[i as usize].map(|x| x as usize);
-        let [a, b, c] = [self.positions[ia], self.positions[ib], self.positions[ic]];
-        let alpha = 1.0 - beta - gamma;
-        let p = Point3::new(
-            alpha * a.x + beta * b.x + gamma * c.x,
-            alpha * a.y + beta * b.y + gamma * c.y,
-            alpha * a.z + beta * b.z + gamma * c.z,
-        );
-        let uv = if self.uvs.is_empty() {
-            Point2::new(beta, gamma)
-        } else {
-            let [ta, tb, tc] = [self.uvs[ia], self.uvs[ib], self.uvs[ic]];
-            Point2::new(
-                alpha * ta.x + beta * tb.x + gamma * tc.x,
-                alpha * ta.y + beta * tb.y + gamma * tc.y,
-            )
-        };
+        let (ix, corners) = self.corners(i);
+        let (p, uv) = self.point_and_uv(ix, corners, beta, gamma);
         LocalGeometry {
             p,
             n: f.n,
@@ -350,6 +345,29 @@ impl Mesh {
     pub fn point(&self, i: u32, beta: f32, gamma: f32) -> (Point3, Normal3) {
         let g = self.geometry(i, beta, gamma);
         (g.p, g.n)
+    }
+}
+
+/// The unit normal of a triangle with edges `e1`, `e2` (following the winding; +z for a
+/// degenerate triangle).
+#[inline(always)]
+fn winding_normal(e1: Vec3, e2: Vec3) -> Normal3 {
+    let n = e1.cross(e2).normalize().to_normal();
+    if n.x.is_finite() {
+        n
+    } else {
+        Normal3::new(0.0, 0.0, 1.0)
+    }
+}
+
+/// `s` made unit length, or `fallback` when it has no direction.
+#[inline(always)]
+fn unit_or(s: Normal3, fallback: Normal3) -> Normal3 {
+    let len = s.to_vec().norm();
+    if len > 0.0 && len.is_finite() {
+        s / len
+    } else {
+        fallback
     }
 }
 

@@ -407,6 +407,39 @@ mod tests {
         b
     }
 
+    /// Traces `rays` as a batch with the registers of `level` and each active lane alone:
+    /// the same closest hit and occlusion, bit for bit, and nothing for inactive lanes. Gives
+    /// each active lane's hit and occlusion.
+    fn batch_against_single_rays(
+        bvh: &Bvh,
+        g: &Geometry,
+        rays: &RayBatch,
+        level: SimdLevel,
+    ) -> Vec<(Option<Hit>, bool)> {
+        let mut st = RayStats::default();
+        let mut hits = [None; BATCH];
+        bvh.intersect_batch_at(level, g, rays, &mut hits, &mut st);
+        let occluded = bvh.occluded_batch_at(level, g, rays, &mut st);
+        let mut out = Vec::new();
+        for i in 0..BATCH {
+            if rays.active >> i & 1 == 0 {
+                assert!(hits[i].is_none() && occluded >> i & 1 == 0);
+                continue;
+            }
+            let ray = rays.ray(i);
+            let single = bvh.intersect(g, &ray, &mut st);
+            let blocked = bvh.occluded(g, &ray, &mut st);
+            assert_eq!(hits[i], single, "{level:?}, lane {i}: {ray:?}");
+            assert_eq!(
+                occluded >> i & 1 == 1,
+                blocked,
+                "{level:?}, lane {i}: {ray:?}"
+            );
+            out.push((single, blocked));
+        }
+        out
+    }
+
     #[test]
     fn batches_get_the_single_ray_hits_at_every_simd_level() {
         let levels = [SimdLevel::Sse, SimdLevel::Avx2, SimdLevel::Avx512];
@@ -423,20 +456,8 @@ mod tests {
             for k in 0..200 {
                 let rays = batch(&mut rng, k);
                 for &level in &levels {
-                    let mut st = RayStats::default();
-                    let mut hits = [None; BATCH];
-                    bvh.intersect_batch_at(level, &g, &rays, &mut hits, &mut st);
-                    let occluded = bvh.occluded_batch_at(level, &g, &rays, &mut st);
-                    for i in 0..BATCH {
-                        if rays.active >> i & 1 == 0 {
-                            assert!(hits[i].is_none() && occluded >> i & 1 == 0);
-                            continue;
-                        }
-                        let ray = rays.ray(i);
-                        let single = bvh.intersect(&g, &ray, &mut st);
-                        assert_eq!(hits[i], single, "{n} prims, {level:?}, lane {i}: {ray:?}");
-                        assert_eq!(occluded >> i & 1 == 1, bvh.occluded(&g, &ray, &mut st));
-                        hits_seen += single.is_some() as usize;
+                    for (hit, _) in batch_against_single_rays(&bvh, &g, &rays, level) {
+                        hits_seen += hit.is_some() as usize;
                     }
                 }
             }
@@ -637,24 +658,7 @@ mod tests {
                 }
             }
             for &level in &levels {
-                let mut st = RayStats::default();
-                let mut hits = [None; BATCH];
-                bvh.intersect_batch_at(level, &g, &rays, &mut hits, &mut st);
-                let occluded = bvh.occluded_batch_at(level, &g, &rays, &mut st);
-                for i in 0..BATCH {
-                    if rays.active >> i & 1 == 0 {
-                        assert!(hits[i].is_none() && occluded >> i & 1 == 0);
-                        continue;
-                    }
-                    let ray = rays.ray(i);
-                    let single = bvh.intersect(&g, &ray, &mut st);
-                    let blocked = bvh.occluded(&g, &ray, &mut st);
-                    assert_eq!(hits[i], single, "{level:?}, batch {k}, lane {i}: {ray:?}");
-                    assert_eq!(
-                        occluded >> i & 1 == 1,
-                        blocked,
-                        "{level:?}, batch {k}, lane {i}"
-                    );
+                for (single, blocked) in batch_against_single_rays(&bvh, &g, &rays, level) {
                     hits_seen += single.is_some() as usize;
                     blocked_seen += blocked as usize;
                     on_edges += single.is_some_and(|h| {

@@ -386,6 +386,39 @@ fn cube<W: Wide>(w: W, l: &Lanes<W>, tmax: W::V, inv: &[[f32; 4]; 3]) -> LaneHit
     }
 }
 
+/// The 2D edge functions (u, v, w) of the watertight triangle test from the sheared corners'
+/// x and y, on every lane. Where one of them is 0 on a lane of `lanes`, f32 cannot decide the
+/// signs: that lane's three are computed again in f64, as the single-ray test does
+/// ([`crate::shape::intersect_triangle`]).
+#[inline(always)]
+pub(super) fn edge_functions<W: Wide>(
+    w: W,
+    [ax, bx, cx]: [W::V; 3],
+    [ay, by, cy]: [W::V; 3],
+    lanes: u32,
+) -> [W::V; 3] {
+    let zero = w.splat(0.0);
+    let u = w.sub(w.mul(cx, by), w.mul(cy, bx));
+    let v = w.sub(w.mul(ax, cy), w.mul(ay, cx));
+    let t = w.sub(w.mul(bx, ay), w.mul(by, ax));
+    let on_edge = w.bits(w.or(w.or(w.eq(u, zero), w.eq(v, zero)), w.eq(t, zero))) & lanes;
+    if on_edge == 0 {
+        return [u, v, t];
+    }
+    let f = |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
+    let mut l = [[0f32; BATCH]; 9];
+    for (dst, src) in l.iter_mut().zip([u, v, t, ax, ay, bx, by, cx, cy]) {
+        w.store(src, dst);
+    }
+    let [mut u, mut v, mut t, ax, ay, bx, by, cx, cy] = l;
+    for i in crate::math::lanes(on_edge) {
+        u[i] = f(cx[i], by[i], cy[i], bx[i]);
+        v[i] = f(ax[i], cy[i], ay[i], cx[i]);
+        t[i] = f(bx[i], ay[i], by[i], ax[i]);
+    }
+    [w.load(&u), w.load(&v), w.load(&t)]
+}
+
 /// [`crate::shape::intersect_triangle`] on every lane (`u`, `v`: the barycentrics of the
 /// second and third vertices).
 #[inline(always)]
@@ -415,26 +448,7 @@ fn triangle<W: Wide>(w: W, l: &Lanes<W>, tmax: W::V, v: &[[f32; 3]; 3]) -> LaneH
     let ay = w.sub(w.sub(sh.pick(w, &v[0], 1), sh.o[1]), w.mul(sy, za));
     let by = w.sub(w.sub(sh.pick(w, &v[1], 1), sh.o[1]), w.mul(sy, zb));
     let cy = w.sub(w.sub(sh.pick(w, &v[2], 1), sh.o[1]), w.mul(sy, zc));
-    let mut u = w.sub(w.mul(cx, by), w.mul(cy, bx));
-    let mut vv = w.sub(w.mul(ax, cy), w.mul(ay, cx));
-    let mut ww = w.sub(w.mul(bx, ay), w.mul(by, ax));
-    let on_edge = w.bits(w.or(w.or(w.eq(u, zero), w.eq(vv, zero)), w.eq(ww, zero))) & sh.active;
-    if on_edge != 0 {
-        // On an edge, f32 cannot decide the sign: the edge functions in f64, for those lanes
-        // (as the single-ray test).
-        let f = |a: f32, b: f32, c: f32, d: f32| (a as f64 * b as f64 - c as f64 * d as f64) as f32;
-        let mut lanes = [[0f32; BATCH]; 9];
-        for (dst, src) in lanes.iter_mut().zip([u, vv, ww, ax, ay, bx, by, cx, cy]) {
-            w.store(src, dst);
-        }
-        let [mut uu, mut v2, mut w2, ax, ay, bx, by, cx, cy] = lanes;
-        for i in crate::math::lanes(on_edge) {
-            uu[i] = f(cx[i], by[i], cy[i], bx[i]);
-            v2[i] = f(ax[i], cy[i], ay[i], cx[i]);
-            w2[i] = f(bx[i], ay[i], by[i], ax[i]);
-        }
-        (u, vv, ww) = (w.load(&uu), w.load(&v2), w.load(&w2));
-    }
+    let [u, vv, ww] = edge_functions(w, [ax, bx, cx], [ay, by, cy], sh.active);
     let neg = w.or(w.or(w.lt(u, zero), w.lt(vv, zero)), w.lt(ww, zero));
     let pos = w.or(w.or(w.gt(u, zero), w.gt(vv, zero)), w.gt(ww, zero));
     let det = w.add(w.add(u, vv), ww);

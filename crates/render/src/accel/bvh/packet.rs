@@ -33,7 +33,7 @@
 //! ordering children by the smallest entry distance of their lanes and skipping popped entries
 //! beyond every lane's closest hit measured 1.03× (full depth) and 1.04× (`max_depth=1`).
 
-use super::lanes::{test, FlatPrim, Lanes};
+use super::lanes::{edge_functions, test, FlatPrim, Lanes};
 use super::layout::{
     Ref, BOX_LEAF, COUNT_MASK, OBJ_LEAF, QUAD_LEAF, SPHERE_LEAF, STACK, TRI_LEAF, W as NODE_WIDTH,
 };
@@ -414,35 +414,7 @@ impl<Q: PacketQuery> WideKernel for Packet<'_, Q> {
                                 .map(|p| w.sub(w.sub(w.splat(v[p][ky][j]), oy), w.mul(sy, z[p])));
                             let [ax, bx, cx] = px;
                             let [ay, by, cy] = py;
-                            let mut u = w.sub(w.mul(cx, by), w.mul(cy, bx));
-                            let mut vv = w.sub(w.mul(ax, cy), w.mul(ay, cx));
-                            let mut ww = w.sub(w.mul(bx, ay), w.mul(by, ax));
-                            let on_edge = w
-                                .bits(w.or(w.or(w.eq(u, zero), w.eq(vv, zero)), w.eq(ww, zero)))
-                                & mask;
-                            if on_edge != 0 {
-                                // f32 cannot decide the sign: the edge functions in f64, for
-                                // those lanes (as the single-ray test).
-                                let f = |a: f32, b: f32, c: f32, d: f32| {
-                                    (a as f64 * b as f64 - c as f64 * d as f64) as f32
-                                };
-                                let mut lanes = [[0f32; BATCH]; 9];
-                                for (dst, src) in
-                                    lanes.iter_mut().zip([u, vv, ww, ax, ay, bx, by, cx, cy])
-                                {
-                                    w.store(src, dst);
-                                }
-                                let [mut uu, mut v2, mut w2, ax, ay, bx, by, cx, cy] = lanes;
-                                let mut e = on_edge;
-                                while e != 0 {
-                                    let i = e.trailing_zeros() as usize;
-                                    e &= e - 1;
-                                    uu[i] = f(cx[i], by[i], cy[i], bx[i]);
-                                    v2[i] = f(ax[i], cy[i], ay[i], cx[i]);
-                                    w2[i] = f(bx[i], ay[i], by[i], ax[i]);
-                                }
-                                (u, vv, ww) = (w.load(&uu), w.load(&v2), w.load(&w2));
-                            }
+                            let [u, vv, ww] = edge_functions(w, [ax, bx, cx], [ay, by, cy], mask);
                             let neg = w.or(w.or(w.lt(u, zero), w.lt(vv, zero)), w.lt(ww, zero));
                             let pos = w.or(w.or(w.gt(u, zero), w.gt(vv, zero)), w.gt(ww, zero));
                             let det = w.add(w.add(u, vv), ww);

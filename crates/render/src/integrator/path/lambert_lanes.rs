@@ -214,58 +214,55 @@ impl LambertLanes {
         self.rect &= !bit;
         self.tri &= !bit;
         self.two_sided &= !bit;
-        if let LaneLight::Tri {
-            corners,
-            n,
-            inv_area,
-            radiance,
-            two_sided,
-            u,
-            pick_pdf,
-        } = v.light
-        {
+        // A light sampled here: its three points (a parallelogram's corner and edges, a
+        // triangle's corners), unit normal, whether it is a triangle, and what both share.
+        let shape = match v.light {
+            LaneLight::Rect {
+                q,
+                inv_area,
+                radiance,
+                two_sided,
+                u,
+                pick_pdf,
+            } => Some((
+                [q.p.to_vec(), q.v, q.w],
+                q.normal(),
+                false,
+                (inv_area, radiance, two_sided, u, pick_pdf),
+            )),
+            LaneLight::Tri {
+                corners,
+                n,
+                inv_area,
+                radiance,
+                two_sided,
+                u,
+                pick_pdf,
+            } => Some((
+                corners.map(|c| c.to_vec()),
+                n,
+                true,
+                (inv_area, radiance, two_sided, u, pick_pdf),
+            )),
+            _ => None,
+        };
+        if let Some((points, n, tri, (inv_area, radiance, two_sided, u, pick_pdf))) = shape {
             let l = &mut self.lights[0];
             l.light &= !bit;
             l.delta &= !bit;
             l.to_surface &= !bit;
             l.to_point &= !bit;
             self.rect |= bit;
-            self.tri |= bit;
+            if tri {
+                self.tri |= bit;
+            }
             if two_sided {
                 self.two_sided |= bit;
             }
-            set3(&mut self.q_p, i, corners[0].to_vec());
-            set3(&mut self.q_v, i, corners[1].to_vec());
-            set3(&mut self.q_w, i, corners[2].to_vec());
+            set3(&mut self.q_p, i, points[0]);
+            set3(&mut self.q_v, i, points[1]);
+            set3(&mut self.q_w, i, points[2]);
             set3(&mut l.n, i, n.to_vec());
-            self.inv_area[i] = inv_area;
-            let uv = Point2::new(0.0, 0.0);
-            put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
-            self.u_light[0][i] = u[0];
-            self.u_light[1][i] = u[1];
-            self.pick_pdf[i] = pick_pdf;
-        } else if let LaneLight::Rect {
-            q,
-            inv_area,
-            radiance,
-            two_sided,
-            u,
-            pick_pdf,
-        } = v.light
-        {
-            let l = &mut self.lights[0];
-            l.light &= !bit;
-            l.delta &= !bit;
-            l.to_surface &= !bit;
-            l.to_point &= !bit;
-            self.rect |= bit;
-            if two_sided {
-                self.two_sided |= bit;
-            }
-            set3(&mut self.q_p, i, q.p.to_vec());
-            set3(&mut self.q_v, i, q.v);
-            set3(&mut self.q_w, i, q.w);
-            set3(&mut l.n, i, q.normal().to_vec());
             self.inv_area[i] = inv_area;
             let uv = Point2::new(0.0, 0.0);
             put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
