@@ -30,7 +30,7 @@ mod plastic;
 mod sample;
 mod specular;
 
-pub use bsdf::{local_wo, world_wi, Bsdf, BsdfModel};
+pub use bsdf::{local_wo, world_wi, Bsdf, BsdfModel, IncidencePlane};
 pub use cook_torrance::CookTorrance;
 pub use dielectric::{relative_eta, sample_smooth, Dispersion, REFERENCE_WAVELENGTH};
 pub use local_model::Whitted;

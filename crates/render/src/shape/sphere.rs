@@ -4,7 +4,9 @@
 //! `radius` (Mitsuba: a transformation `translate(center)·scale(radius)`).
 //!
 //! Rays are moved into the sphere's frame by `T⁻¹`; the normal goes back by the inverse
-//! transpose. uv follows the course: `u = atan2(y, x)/2π` in [0, 1), `v = acos(z)/π`.
+//! transpose. A sphere placed by a translation after a uniform scale (a centre and a radius)
+//! finds the surface at a hit in world space instead, with the same result up to rounding.
+//! uv follows the course: `u = atan2(y, x)/2π` in [0, 1), `v = acos(z)/π`.
 
 use super::{LocalGeometry, ShapeHit};
 use crate::math::{Bounds3, Normal3, Point2, Point3, Ray, Transform, Vec3, INV_PI, PI};
@@ -14,12 +16,29 @@ use crate::math::{Bounds3, Normal3, Point2, Point3, Ray, Transform, Vec3, INV_PI
 pub struct Sphere {
     /// Object → world.
     pub world_from_object: Transform,
+    /// Centre and radius when the placement is a translation after a uniform scale (Mitsuba's
+    /// `center` and `radius`): the surface at a hit is then found in world space (a point on
+    /// the sphere is the centre plus the radius times its unit direction), without moving the
+    /// ray into the object frame and the point, normal and tangent back out of it.
+    round: Option<(Point3, f32)>,
 }
 
 impl Sphere {
     /// A sphere placed by `t`.
     pub fn new(world_from_object: Transform) -> Self {
-        Self { world_from_object }
+        let m = &world_from_object.m.m;
+        let r = m[0][0];
+        let uniform = r > 0.0
+            && r.is_finite()
+            && m[1][1] == r
+            && m[2][2] == r
+            && [m[0][1], m[0][2], m[1][0], m[1][2], m[2][0], m[2][1]] == [0.0; 6]
+            && m[3] == [0.0, 0.0, 0.0, 1.0];
+        let round = uniform.then(|| (Point3::new(m[0][3], m[1][3], m[2][3]), r));
+        Self {
+            world_from_object,
+            round,
+        }
     }
 
     /// Both parameters where the ray's line crosses the sphere, in increasing order, in the
@@ -66,14 +85,28 @@ impl Sphere {
 
     /// The surface at a hit found by [`Sphere::intersect`].
     pub fn geometry(&self, ray: &Ray, t: f32) -> LocalGeometry {
-        local_geometry(&self.world_from_object, self.object_hit(ray, t), true)
+        self.geometry_at_hit(ray, t, true)
     }
 
     /// [`Sphere::geometry`] without texture coordinates (left at zero): for scenes where no
     /// texture reads them, which spares an arctangent and an arccosine per hit.
     #[inline(always)]
     pub fn geometry_without_uv(&self, ray: &Ray, t: f32) -> LocalGeometry {
-        local_geometry(&self.world_from_object, self.object_hit(ray, t), false)
+        self.geometry_at_hit(ray, t, false)
+    }
+
+    /// The surface at the hit at `t` along `ray`, with texture coordinates when `uv`.
+    #[inline(always)]
+    fn geometry_at_hit(&self, ray: &Ray, t: f32, uv: bool) -> LocalGeometry {
+        match self.round {
+            Some((c, r)) => {
+                // The hit's direction from the centre is the object-space point (the uniform
+                // scale divides out), re-projected onto the sphere.
+                let q = (ray.o + ray.d * t) - c;
+                round_geometry(c, r, q / q.norm(), uv)
+            }
+            None => local_geometry(&self.world_from_object, self.object_hit(ray, t), uv),
+        }
     }
 
     /// The hit at `t` along `ray` in object space, re-projected onto the unit sphere to remove
@@ -88,7 +121,10 @@ impl Sphere {
 
     /// The surface at the object-space point `q` (unit length).
     pub fn geometry_at(&self, q: Vec3) -> LocalGeometry {
-        local_geometry(&self.world_from_object, q, true)
+        match self.round {
+            Some((c, r)) => round_geometry(c, r, q, true),
+            None => local_geometry(&self.world_from_object, q, true),
+        }
     }
 
     /// Exact bounds of the transformed sphere (an ellipsoid): along axis i its half extent is
@@ -123,6 +159,21 @@ fn local_geometry(t: &Transform, q: Vec3, uv: bool) -> LocalGeometry {
         ns: n,
         uv: Point2::new(u, v),
         dpdu,
+    }
+}
+
+/// [`local_geometry`] for the sphere of centre `c` and radius `r` (a translation after a
+/// uniform scale): the same surface, in world space.
+#[inline(always)]
+fn round_geometry(c: Point3, r: f32, q: Vec3, uv: bool) -> LocalGeometry {
+    let (u, v) = if uv { sphere_uv(q) } else { (0.0, 0.0) };
+    let n = Normal3::new(q.x, q.y, q.z);
+    LocalGeometry {
+        p: c + q * r,
+        n,
+        ns: n,
+        uv: Point2::new(u, v),
+        dpdu: Vec3::new(-2.0 * PI * r * q.y, 2.0 * PI * r * q.x, 0.0),
     }
 }
 
@@ -212,5 +263,61 @@ mod tests {
         assert!((g.uv.x - 0.75).abs() < 1e-6);
         let g = s.geometry_at(Vec3::new(0.0, 0.0, -1.0));
         assert!((g.uv.y - 1.0).abs() < 1e-6);
+    }
+
+    /// A sphere placed by a translation after a uniform scale takes the world-space shortcut
+    /// (`round`), and gives the surface the object-space route gives, within rounding: point,
+    /// normal, tangent and texture coordinates, at hits of random rays and at given points.
+    /// Placements that rotate, stretch or mirror keep the object-space route.
+    #[test]
+    fn round_spheres_match_the_object_space_route() {
+        let place = Transform::translation(Vec3::new(0.38, -0.68, 0.3))
+            * Transform::scaling(Vec3::new(0.32, 0.32, 0.32));
+        let fast = Sphere::new(place);
+        assert_eq!(fast.round, Some((Point3::new(0.38, -0.68, 0.3), 0.32)));
+        let slow = Sphere {
+            world_from_object: place,
+            round: None,
+        };
+        for t in [
+            Transform::rotation_z(30.0) * place,
+            Transform::scaling(Vec3::new(1.0, 2.0, 1.0)),
+            Transform::scaling(Vec3::new(-1.0, -1.0, -1.0)),
+        ] {
+            assert_eq!(Sphere::new(t).round, None);
+        }
+        let mut rng = crate::sampling::pcg::Pcg32::new(7, 1);
+        let mut checked = 0;
+        for _ in 0..2000 {
+            let o = Point3::new(
+                rng.next_f32() * 4.0 - 2.0,
+                rng.next_f32() * 4.0 - 2.0,
+                rng.next_f32() * 4.0 - 2.0,
+            );
+            let target = Point3::new(
+                0.38 + rng.next_f32() * 0.6 - 0.3,
+                -0.68 + rng.next_f32() * 0.6 - 0.3,
+                0.3 + rng.next_f32() * 0.6 - 0.3,
+            );
+            let ray = Ray::new(o, (target - o).normalize());
+            let Some(h) = fast.intersect(&ray) else {
+                continue;
+            };
+            checked += 1;
+            for uv in [false, true] {
+                let (a, b) = (
+                    fast.geometry_at_hit(&ray, h.t, uv),
+                    slow.geometry_at_hit(&ray, h.t, uv),
+                );
+                assert!(a.p.approx_eq(b.p, 2e-6), "{a:?} {b:?}");
+                assert!(a.n.to_vec().approx_eq(b.n.to_vec(), 2e-6), "{a:?} {b:?}");
+                assert!(a.dpdu.approx_eq(b.dpdu, 1e-5), "{a:?} {b:?}");
+                assert!((a.uv.x - b.uv.x).abs() < 1e-5 || (a.uv.x - b.uv.x).abs() > 0.99999);
+                assert!((a.uv.y - b.uv.y).abs() < 1e-5);
+                // On the sphere, to rounding.
+                assert!(((a.p - Point3::new(0.38, -0.68, 0.3)).norm() - 0.32).abs() < 1e-6);
+            }
+        }
+        assert!(checked > 500, "{checked} hits");
     }
 }

@@ -14,7 +14,7 @@ use super::{Integrator, SampleBatch, BATCH_SAMPLES};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
-use crate::material::{local_wo, relative_eta, sample_smooth, sample_specular, world_wi, Model};
+use crate::material::{relative_eta, sample_smooth, sample_specular, IncidencePlane, Model};
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -146,11 +146,10 @@ impl Path {
     /// found there, samples a light (the shadow ray is the caller's to test), samples the
     /// next direction and plays Russian roulette.
     ///
-    /// With `defer` (the batch's Lambert lanes, whether to take [`Path::delta_vertex`], and
-    /// this path's lane), a vertex at a Lambert surface stops once it has drawn its numbers and
-    /// sampled a light, and leaves the rest to [`LambertLanes::shade`]: it then returns `None`;
-    /// a vertex at a perfect mirror or a smooth dielectric is shaded by
-    /// [`Path::delta_vertex`].
+    /// With `defer` (the batch's Lambert lanes and this path's lane), a vertex at a Lambert
+    /// surface stops once it has drawn its numbers and sampled a light, and leaves the rest to
+    /// [`LambertLanes::shade`]: it then returns `None`. With `delta`, a vertex at a perfect
+    /// mirror or a smooth dielectric is shaded by [`Path::delta_vertex`].
     #[inline(always)]
     fn vertex(
         &self,
@@ -158,7 +157,7 @@ impl Path {
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-        defer: Option<(&mut LambertLanes, bool, usize)>,
+        (defer, delta): (Option<(&mut LambertLanes, usize)>, bool),
         every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
@@ -216,9 +215,9 @@ impl Path {
         }
 
         let material = scene.material(&si);
-        let (lambert, delta, lane) = match defer {
-            Some((lambert, delta, lane)) => (Some(lambert), delta, lane),
-            None => (None, false, 0),
+        let (lambert, lane) = match defer {
+            Some((lambert, lane)) => (Some(lambert), lane),
+            None => (None, 0),
         };
         if let (Some(lanes), Model::Diffuse { reflectance }) = (lambert, &material.model) {
             // A Lambert vertex, left to the batch's Lambert lanes once its numbers are drawn
@@ -370,11 +369,15 @@ impl Path {
     /// or a smooth dielectric, the emission found there added (`None`: the material is neither):
     /// what the general vertex below does for it — `Material::bsdf`, `Bsdf::local_wo`, the
     /// model's sample with the numbers drawn as there, `Bsdf::world_sample`, the throughput,
-    /// Πη², the next ray and Russian roulette — with the same operations in the same order,
-    /// without building the BSDF (an out-of-line call returning a large value, another for
-    /// the sample), without the light sampling a delta BSDF skips, and without the shading
-    /// point, unread after a delta vertex (`prev_delta`: the next vertex makes its own before
-    /// reading it). Gives whether the path goes on.
+    /// Πη², the next ray and Russian roulette — without building the BSDF (an out-of-line call
+    /// returning a large value, another for the sample), without the light sampling a delta
+    /// BSDF skips, and without the shading point, unread after a delta vertex (`prev_delta`:
+    /// the next vertex makes its own before reading it). Gives whether the path goes on.
+    ///
+    /// Nor is the shading frame built: the models sample in the plane of incidence
+    /// ([`IncidencePlane`]), which gives the direction a frame gives up to rounding. Single
+    /// paths ([`Integrator::radiance`]) take this vertex too, so that a batch's lanes and a
+    /// path alone agree bit for bit.
     #[inline(always)]
     fn delta_vertex(
         &self,
@@ -386,7 +389,7 @@ impl Path {
         let refl = |t: &crate::texture::Texture, w: &Wavelengths| {
             t.spectral(si.uv, w, crate::spectrum::RgbRole::Reflectance)
         };
-        let frame = si.shading_frame();
+        let plane = IncidencePlane::new(si.ns.to_vec(), si.wo);
         // The light sample's pair, unread by a delta BSDF: passed over, so that every vertex
         // at a depth draws from the same dimensions (see `Path::vertex`).
         let light_pair = |sampler: &mut Sampler| {
@@ -401,7 +404,7 @@ impl Path {
                 mf: None,
             } => {
                 let r = refl(reflectance, &st.lambda);
-                let (o, flip) = local_wo(&frame, material.two_sided, si.wo);
+                let (o, flip) = plane.local_wo(material.two_sided);
                 light_pair(sampler);
                 // The BSDF's numbers, unread by a mirror.
                 sampler.skip_1d();
@@ -423,7 +426,7 @@ impl Path {
                 // A dispersive glass on a spectral path keeps only its hero wavelength.
                 let eta = relative_eta(*eta, dispersion.as_deref(), &mut st.lambda);
                 // A dielectric is never two-sided.
-                let (o, _) = local_wo(&frame, false, si.wo);
+                let (o, _) = plane.local_wo(false);
                 light_pair(sampler);
                 let u = sampler.next_1d();
                 sampler.skip_1d();
@@ -435,7 +438,7 @@ impl Path {
         let Some(s) = s else {
             return Some(false);
         };
-        let Some(wi) = world_wi(&frame, &s, flip) else {
+        let Some(wi) = plane.world_wi(&s, flip) else {
             return Some(false);
         };
         st.beta *= s.weight;
@@ -557,6 +560,53 @@ impl Integrator for Path {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum {
+        self.radiance_with(scene, camera_ray, lambda, sampler, stats, true)
+    }
+
+    fn radiance_batch(
+        &self,
+        scene: &Scene,
+        batch: SampleBatch<'_>,
+        samplers: &mut [Sampler],
+        stats: &mut RayStats,
+        out: &mut [SampledSpectrum],
+    ) {
+        // See `Path::trace_batch`.
+        if has_delta_surfaces(scene) {
+            self.trace_batch::<true>(scene, batch, samplers, stats, out);
+        } else {
+            self.trace_batch::<false>(scene, batch, samplers, stats, out);
+        }
+    }
+}
+
+impl Path {
+    /// [`Integrator::radiance`] with mirrors and smooth glass shaded through their BSDFs and
+    /// shading frames, as every other surface is, instead of by [`Path::delta_vertex`]: for
+    /// tests, which check that the two agree (within rounding: the directions differ in their
+    /// last bits).
+    #[doc(hidden)]
+    pub fn radiance_through_bsdfs(
+        &self,
+        scene: &Scene,
+        camera_ray: &Ray,
+        lambda: &mut Wavelengths,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+    ) -> SampledSpectrum {
+        self.radiance_with(scene, camera_ray, lambda, sampler, stats, false)
+    }
+
+    /// One path alone; `delta`: shade mirrors and smooth glass by [`Path::delta_vertex`].
+    fn radiance_with(
+        &self,
+        scene: &Scene,
+        camera_ray: &Ray,
+        lambda: &mut Wavelengths,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        delta: bool,
+    ) -> SampledSpectrum {
         let mut st = PathState::new(camera_ray, *lambda);
         let every = every_light(scene);
         let mut extra = [None; MAX_SHADOWS];
@@ -567,7 +617,7 @@ impl Integrator for Path {
                 &mut st,
                 hit,
                 sampler,
-                None,
+                (None, delta),
                 every.then_some(&mut extra),
             );
             let Some(out) = o else {
@@ -589,24 +639,6 @@ impl Integrator for Path {
         }
     }
 
-    fn radiance_batch(
-        &self,
-        scene: &Scene,
-        batch: SampleBatch<'_>,
-        samplers: &mut [Sampler],
-        stats: &mut RayStats,
-        out: &mut [SampledSpectrum],
-    ) {
-        // See `Path::trace_batch`.
-        if has_delta_surfaces(scene) {
-            self.trace_batch::<true>(scene, batch, samplers, stats, out);
-        } else {
-            self.trace_batch::<false>(scene, batch, samplers, stats, out);
-        }
-    }
-}
-
-impl Path {
     /// [`BATCH`] paths side by side: their rays are traced together (small scenes test each
     /// primitive against all of them at once), their vertices shaded one by one, each drawing
     /// from its own sample's cursor. Where a batch costs the same however few of its lanes are
@@ -685,7 +717,7 @@ impl Path {
                 let s = slot[i];
                 let sampler = &mut samplers[samplers_of[s] as usize];
                 sampler.resume(cursors[s]);
-                let lanes = Some((&mut lambert, DELTA, i));
+                let lanes = (Some((&mut lambert, i)), DELTA);
                 let o = if every {
                     let o =
                         self.vertex(scene, &mut st[i], hits[i], sampler, lanes, Some(&mut extra));
