@@ -8,7 +8,7 @@ mod support;
 use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
 use candela_render::integrator::{Integrator, Path, SampleBatch, BATCH_RUNS, SAMPLE_QUEUE};
-use candela_render::light::{Components, Emission, Light, PointLight};
+use candela_render::light::{Components, Emission, Environment, Light, PointLight};
 use candela_render::material::{Dispersion, Distribution, Material, Microfacet, Model};
 use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::sampling::{Pcg32, Sampler, SamplerKind};
@@ -68,9 +68,17 @@ fn large_scene() -> Scene {
 
 /// The Cornell box with every kind of vertex a batch shades: two-sided diffuse walls (seen
 /// from behind too), a mirror, a plastic block, the one-sided ceiling light, a small two-sided
-/// light, a textured (checkered) light, and a point light, so that lights are chosen by their
-/// importance and sampled both by the Lambert lanes and by the lights themselves.
+/// light, a textured (checkered) light, a point light and a dim constant sky (seen through the
+/// open front), so that lights are chosen by their importance and sampled both by the Lambert
+/// lanes and by the lights themselves.
 fn mixed_scene(spectral: bool) -> Scene {
+    mixed_scene_with(spectral, true)
+}
+
+/// [`mixed_scene`] with or without its sky: without, its shapes and point light are few
+/// enough for every vertex to sample every light (`every_light`), the shapes' samples
+/// weighed by MIS.
+fn mixed_scene_with(spectral: bool, sky: bool) -> Scene {
     let base = support::radiosity::cornell(AccelKind::Bvh);
     let mut b = SceneBuilder::new();
     for (i, mat) in base.materials.iter().enumerate() {
@@ -131,6 +139,12 @@ fn mixed_scene(spectral: bool) -> Scene {
         },
         Components::from_intensity(Rgb::splat(0.4)),
     ));
+    if sky {
+        b.add_light(Light::Environment(Environment::new(
+            Texture::Uniform(Rgb::new(0.1, 0.15, 0.2)),
+            Transform::IDENTITY,
+        )));
+    }
     finish(b, base.camera, spectral)
 }
 
@@ -333,7 +347,7 @@ fn mesh_scene(spectral: bool) -> Scene {
         b.add_mesh(mesh);
     }
     for l in &base.lights {
-        if matches!(l, Light::Point(..)) {
+        if matches!(l, Light::Point(..) | Light::Environment(..)) {
             b.add_light(l.clone());
         }
     }
@@ -464,7 +478,8 @@ fn batch_and_singles(
 
 /// Runs of several pixels in one batch (the renderer gathers up to `BATCH_RUNS`): paths of one
 /// pixel take the lanes another's leave, and each still gets its single path's bits, in small
-/// scenes (lanes refilled), in the every-light mode, in spectral mode, and in a deep tree.
+/// scenes (lanes refilled), in the every-light mode (delta lights alone, and with emissive
+/// shapes), in spectral mode, and in a deep tree.
 #[test]
 fn runs_of_several_pixels_in_one_batch_agree_with_single_paths() {
     let runs = [
@@ -479,6 +494,7 @@ fn runs_of_several_pixels_in_one_batch_agree_with_single_paths() {
     check_runs(&cornell, &runs, 64, false);
     for spectral in [false, true] {
         check_runs(&mixed_scene(spectral), &runs, 64, spectral);
+        check_runs(&mixed_scene_with(spectral, false), &runs, 64, spectral);
         check_runs(&delta_lit_scene(spectral), &runs, 64, spectral);
     }
     check_runs(&delta_scene(false, false), &runs, 64, false);

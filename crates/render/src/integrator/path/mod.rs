@@ -4,7 +4,10 @@
 //! [`Path`]: at every vertex one light is sampled (next-event estimation: the light chosen by
 //! its importance at the shading point, see [`crate::light::LightSelector`], and sampled by
 //! [`crate::light::Light::sample_from`]) and one BSDF direction is sampled; both estimates are
-//! combined by multiple importance sampling with the power heuristic (Veach 1997). Russian roulette starts at `rr_depth` (default 5). `max_depth` follows
+//! combined by multiple importance sampling with the power heuristic (Veach 1997). In scenes
+//! of two to eight lights, delta lights and emissive shapes with at least one delta light,
+//! every vertex samples every light instead, each with its shadow ray (see `every_light`).
+//! Russian roulette starts at `rr_depth` (default 5). `max_depth` follows
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
 //! (The course's branching estimator is [`super::CoursePath`].)
 
@@ -121,17 +124,21 @@ const MAX_SHADOWS: usize = 8;
 type Shadows = [Option<(Ray, SampledSpectrum)>; MAX_SHADOWS];
 
 /// True when every vertex samples every light, each with its own shadow ray, rather than
-/// one chosen by its importance: a scene of two to [`MAX_SHADOWS`] lights, all delta lights
-/// (point, spot, distant). Their light samples cost little and the choice of one would add its
-/// own variance (and the importances cost as much as the samples); BSDF sampling never finds a
-/// delta light, so there is nothing to weigh by MIS.
+/// one chosen by its importance: a scene of two to [`MAX_SHADOWS`] lights, delta lights
+/// (point, spot, distant) and emissive shapes, at least one a delta light. Their light samples
+/// cost little and the choice of one would add its own variance (and the importances cost as
+/// much as the samples). BSDF sampling never finds a delta light; a shape's light sample and
+/// BSDF sampling are weighed by MIS, the light's choice probability being 1. (Emissive shapes
+/// alone keep the uniform choice of one, cheaper there: see `light::select`.)
 #[inline]
 fn every_light(scene: &Scene) -> bool {
     let lights = &scene.lights;
+    let delta = |l: &Light| matches!(l, Light::Point(..) | Light::Spot(..) | Light::Distant(..));
     (2..=MAX_SHADOWS).contains(&lights.len())
+        && lights.iter().any(delta)
         && lights
             .iter()
-            .all(|l| matches!(l, Light::Point(..) | Light::Spot(..) | Light::Distant(..)))
+            .all(|l| delta(l) || matches!(l, Light::Area(..)))
 }
 
 /// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
@@ -201,7 +208,11 @@ impl Path {
             if !le.is_black() {
                 let w = match si.props.light {
                     Some(li) if !st.prev_delta => {
-                        let pick = scene.light_selector.pmf(lights, &st.prev, li as usize);
+                        // (Every light is sampled at every vertex in the every-light mode.)
+                        let pick = match every {
+                            Some(_) => 1.0,
+                            None => scene.light_selector.pmf(lights, &st.prev, li as usize),
+                        };
                         let pdf_light = pick * lights[li as usize].pdf_hit(st.prev.p, si.p, si.n);
                         power_heuristic(1.0, st.prev_pdf, 1.0, pdf_light)
                     }
@@ -295,8 +306,8 @@ impl Path {
         // Next-event estimation (see `Path::sample_light`).
         let mut shadow = None;
         if let (false, Some(every)) = (bsdf.is_delta(), every) {
-            // A few delta lights: every one of them, each with its shadow ray (see
-            // `every_light`), left in `every`.
+            // A few lights: every one of them, each with its shadow ray (see `every_light`),
+            // left in `every`; a shape's sample weighed against BSDF sampling by MIS.
             let u = sampler.next_2d();
             for (k, light) in lights.iter().enumerate() {
                 let ls = light.sample_from(&scene.geometry, &scene.emissions, &sp, u, &st.lambda);
@@ -304,9 +315,14 @@ impl Path {
                     let wi = bsdf.local_wi(ls.wi, flip);
                     let f = bsdf.eval_local(wo, wi);
                     if !f.is_black() {
+                        let w = if ls.delta {
+                            1.0
+                        } else {
+                            power_heuristic(1.0, ls.pdf, 1.0, bsdf.pdf_local(wo, wi))
+                        };
                         every[k] = Some((
                             super::local::shadow_ray(&si, ls.wi, ls.target),
-                            st.beta * f * ls.li * (1.0 / ls.pdf),
+                            st.beta * f * ls.li * (w / ls.pdf),
                         ));
                     }
                 }
