@@ -76,13 +76,20 @@ impl Distribution1D {
     #[inline]
     pub fn sample_discrete(&self, u: f32) -> (usize, f32) {
         let n = self.func.len();
-        // The last bin whose CDF start is ≤ u (`search`): from the guide entry of the bin
-        // below u's (which no round-off of u·n can put past it), forward.
-        let g = ((u * n as f32) as usize).min(n - 1).saturating_sub(1);
-        let mut i = self.guide[g] as usize;
-        while i < n - 1 && self.cdf[i + 1] <= u {
-            i += 1;
-        }
+        // The last bin whose CDF start is ≤ u (`search`). A few bins (a mesh light's
+        // triangles, say): the count of bin starts past the first that are ≤ u (the CDF never
+        // decreases), without a branch on u. More: from the guide entry of the bin below u's
+        // (which no round-off of u·n can put past it), forward.
+        let i = if n <= FEW_BINS {
+            self.cdf[1..n].iter().map(|&c| (c <= u) as usize).sum()
+        } else {
+            let g = ((u * n as f32) as usize).min(n - 1).saturating_sub(1);
+            let mut i = self.guide[g] as usize;
+            while i < n - 1 && self.cdf[i + 1] <= u {
+                i += 1;
+            }
+            i
+        };
         let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
         let du = if hi > lo {
             ((u - lo) / (hi - lo)).clamp(0.0, super::sampler::ONE_MINUS_EPSILON)
@@ -112,6 +119,9 @@ impl Distribution1D {
         self.discrete_pdf(i) * self.func.len() as f32
     }
 }
+
+/// Distributions of at most this many bins find a sample's bin by counting.
+const FEW_BINS: usize = 16;
 
 /// A piecewise-constant density on [0,1)² from a grid of values (row `v`, column `u`).
 #[derive(Clone, Debug, PartialEq)]
@@ -177,12 +187,13 @@ mod tests {
         assert!((u.discrete_pdf(1) - 0.5).abs() < 1e-6);
     }
 
-    /// The guide table finds the bin the binary search finds, for every u near the bins'
-    /// edges and the guide's own, with zero bins and a few huge ones.
+    /// The count (few bins) and the guide table (more) find the bin the binary search finds,
+    /// for every u near the bins' edges and the guide's own, with zero bins and a few huge
+    /// ones.
     #[test]
     fn the_guide_table_finds_the_searched_bin() {
         let mut rng = crate::sampling::Pcg32::new(8, 1);
-        for n in [1usize, 2, 3, 7, 64, 257] {
+        for n in [1usize, 2, 3, 7, FEW_BINS, FEW_BINS + 1, 64, 257] {
             let f: Vec<f32> = (0..n)
                 .map(|i| match i % 5 {
                     0 => 0.0,
