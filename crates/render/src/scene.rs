@@ -485,6 +485,36 @@ impl SceneBuilder {
         self
     }
 
+    /// Adds a triangle mesh as [`SceneBuilder::add_mesh`] does, or, when it is a few flat
+    /// parallelograms ([`Mesh::parallelograms`]) and nothing reads its texture coordinates
+    /// (its material and emission are the same all over), as those parallelograms: the same
+    /// surface, at half the intersection tests, and a rectangle light sampled by its area
+    /// (the Lambert lanes sample it themselves) instead of a mesh light. An emissive mesh is
+    /// taken for a parallelogram only when it is one (several would become as many lights,
+    /// chosen uniformly rather than by their areas). Scene files' meshes come this way.
+    pub fn add_mesh_or_parallelograms(&mut self, mesh: Mesh) -> &mut Self {
+        let props = mesh.props;
+        let flat_look = self
+            .materials
+            .get(props.material as usize)
+            .is_some_and(|m| !m.reads_uv())
+            && props.emission.is_none_or(|e| {
+                self.emissions
+                    .get(e as usize)
+                    .is_some_and(|e| e.radiance.is_constant())
+            });
+        let one_if_emissive = props.emission.is_none() || mesh.len() == 2;
+        match mesh.parallelograms() {
+            Some(quads) if flat_look && one_if_emissive => {
+                for q in quads {
+                    self.add_shape(Shape::Parallelogram(q), props.material, props.emission);
+                }
+                self
+            }
+            _ => self.add_mesh(mesh),
+        }
+    }
+
     /// Adds a group of shapes to be placed by [`SceneBuilder::add_instance`] (and not
     /// otherwise), in its own space, and returns its index. Each shape is given as
     /// `(shape, material)`; meshes carry their material. A group holds bounded shapes that
@@ -677,5 +707,74 @@ mod tests {
         assert!(s.visible(Point3::ORIGIN, Point3::new(3.9, 0.0, 0.0), &mut st));
         assert!(s.visible(Point3::ORIGIN, Point3::new(0.0, 10.0, 0.0), &mut st));
         assert!(!s.visible(Point3::ORIGIN, Point3::new(0.0, 0.0, -2.0), &mut st));
+    }
+
+    /// Scene files' quads become parallelograms (a lit one a rectangle light), unless a
+    /// texture reads their coordinates or an emissive mesh has several.
+    #[test]
+    fn flat_quads_become_parallelograms_when_nothing_reads_their_coordinates() {
+        use crate::light::AreaShape;
+        use crate::shape::Mesh;
+        let quad = |y: f32, n: usize| {
+            let mut m = Mesh::default();
+            for k in 0..n {
+                let x = 2.0 * k as f32;
+                let b = m.positions.len() as u32;
+                m.positions.extend([
+                    Point3::new(x, y, 0.0),
+                    Point3::new(x + 1.0, y, 0.0),
+                    Point3::new(x + 1.0, y, 1.0),
+                    Point3::new(x, y, 1.0),
+                ]);
+                m.indices.extend([[b, b + 2, b + 1], [b, b + 3, b + 2]]);
+            }
+            m
+        };
+        let mut b = SceneBuilder::new();
+        let plain = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.5))));
+        let checkered = b.add_material(Material::diffuse(Texture::Checkered {
+            c1: Rgb::splat(0.2),
+            c2: Rgb::splat(0.8),
+            steps: [4.0, 4.0],
+            offset: [0.0, 0.0],
+        }));
+        let glow = b.add_emission(Emission {
+            radiance: Texture::Uniform(Rgb::splat(3.0)),
+            two_sided: false,
+        });
+        let mut add = |y: f32, n: usize, material: u32, emission: Option<u32>| {
+            let mut m = quad(y, n);
+            m.props.material = material;
+            m.props.emission = emission;
+            b.add_mesh_or_parallelograms(m);
+        };
+        add(0.0, 2, plain, None); // two parallelograms
+        add(1.0, 1, checkered, None); // a mesh: its texture reads uv
+        add(2.0, 1, plain, Some(glow)); // a rectangle light
+        add(3.0, 2, plain, Some(glow)); // a mesh light: two quads
+        let s = b.build(crate::accel::AccelKind::Bvh);
+        let objects = s.geometry.objects();
+        assert_eq!(objects.len(), 3);
+        assert!(objects
+            .iter()
+            .all(|o| matches!(o.shape, Shape::Parallelogram(_))));
+        assert_eq!(s.geometry.meshes().len(), 2);
+        assert_eq!(s.lights.len(), 2);
+        assert!(matches!(
+            &s.lights[0],
+            Light::Area(a) if matches!(a.shape, AreaShape::Parallelogram(_))
+        ));
+        assert!(matches!(
+            &s.lights[1],
+            Light::Area(a) if matches!(a.shape, AreaShape::Mesh { .. })
+        ));
+        // The light faces as the triangles wind: (b, b+2, b+1) turns to +y.
+        let Some(Light::Area(a)) = s.lights.first() else {
+            unreachable!()
+        };
+        let AreaShape::Parallelogram(q) = &a.shape else {
+            unreachable!()
+        };
+        assert!(q.normal().y > 0.999);
     }
 }

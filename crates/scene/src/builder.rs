@@ -747,7 +747,7 @@ impl Builder<'_> {
         self.count_mesh(&mesh, pos)?;
         self.report.triangles += mesh.len();
         self.mesh_bytes += crate::mesh::bytes_per_triangle(&mesh) * mesh.len() as f64;
-        self.scene.add_mesh(mesh);
+        self.scene.add_mesh_or_parallelograms(mesh);
         Ok(())
     }
 

@@ -23,7 +23,8 @@ fn files_are_found_beside_the_scene_or_in_the_current_directory() {
     std::fs::create_dir_all(dir.join("tests/data")).unwrap();
     std::fs::write(
         dir.join("tests/data/tri.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n",
+        // Two triangles (not a parallelogram, which would be loaded as one).
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1.5 0\nf 1 2 3\nf 2 4 3\n",
     )
     .unwrap();
     let l = load_scene(&scene, &LoadOptions::default()).unwrap();

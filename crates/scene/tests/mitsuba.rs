@@ -388,14 +388,19 @@ fn transforms_compose_in_order() {
     assert_eq!(e, "2:22: <translate> can only appear inside a <transform>");
 }
 
+/// A BSDF that reads texture coordinates, so that a mesh is not loaded as parallelograms.
+const CHECKERED: &str =
+    r#"<bsdf type="diffuse"><texture type="checkerboard" name="reflectance"/></bsdf>"#;
+
 #[test]
 fn analytic_shapes() {
     let l = load(&scene(
-        r#"<shape type="sphere"><point name="center" x="1" y="2" z="3"/><float name="radius" value="0.5"/></shape>
+        &r#"<shape type="sphere"><point name="center" x="1" y="2" z="3"/><float name="radius" value="0.5"/></shape>
            <shape type="rectangle"><transform name="to_world"><scale x="2"/><translate z="1"/></transform></shape>
-           <shape type="rectangle"><boolean name="flip_normals" value="true"/></shape>
+           <shape type="rectangle"><boolean name="flip_normals" value="true"/>{CHECKERED}</shape>
            <shape type="disk"><boolean name="flip_normals" value="true"/></shape>
-           <shape type="cube"><transform name="to_world"><translate x="5"/></transform></shape>"#,
+           <shape type="cube"><transform name="to_world"><translate x="5"/></transform></shape>"#
+            .replace("{CHECKERED}", CHECKERED),
     ));
     let objects = l.scene.geometry.objects();
     let b = objects[0].shape.bounds().unwrap();
@@ -432,9 +437,9 @@ fn analytic_shapes() {
     );
     // A mirroring transform flips the edges' cross product but not Mitsuba's normal: two
     // triangles facing +z again.
-    let l = load(&scene(
-        r#"<shape type="rectangle"><transform name="to_world"><scale x="-1"/></transform></shape>"#,
-    ));
+    let l = load(&scene(&format!(
+        r#"<shape type="rectangle"><transform name="to_world"><scale x="-1"/></transform>{CHECKERED}</shape>"#
+    )));
     let g = l.scene.geometry.meshes()[0].geometry(0, 0.2, 0.2);
     assert!(g.n.to_vec().approx_eq(Vec3::Z, 1e-6), "{:?}", g.n);
     // Errors.
@@ -490,11 +495,11 @@ fn meshes_from_files() {
     std::fs::write(dir.join("tri.ply"), ply).unwrap();
     let l = load_at(
         &dir.join("s.xml"),
-        &scene(
-            r#"<shape type="obj"><string name="filename" value="quad.obj"/><transform name="to_world"><translate z="2"/></transform></shape>
-               <shape type="obj"><string name="filename" value="quad.obj"/><boolean name="face_normals" value="true"/><boolean name="flip_normals" value="true"/></shape>
-               <shape type="ply"><string name="filename" value="tri.ply"/><emitter type="area"><rgb name="radiance" value="1, 2, 3"/></emitter></shape>"#,
-        ),
+        &scene(&format!(
+            r#"<shape type="obj"><string name="filename" value="quad.obj"/><transform name="to_world"><translate z="2"/></transform>{CHECKERED}</shape>
+               <shape type="obj"><string name="filename" value="quad.obj"/><boolean name="face_normals" value="true"/><boolean name="flip_normals" value="true"/>{CHECKERED}</shape>
+               <shape type="ply"><string name="filename" value="tri.ply"/><emitter type="area"><rgb name="radiance" value="1, 2, 3"/></emitter></shape>"#
+        )),
     );
     let m = l.scene.geometry.meshes();
     assert_eq!(m.len(), 3);
@@ -522,6 +527,21 @@ fn meshes_from_files() {
         }
     );
     assert_eq!(l.mesh_stats.map(|s| s.0), Some(5));
+    // Without a texture reading its coordinates, the quad is loaded as a parallelogram (lit:
+    // a rectangle light), facing as its triangles wind.
+    let l = load_at(
+        &dir.join("s.xml"),
+        &scene(
+            r#"<shape type="obj"><string name="filename" value="quad.obj"/><emitter type="area"><rgb name="radiance" value="1, 2, 3"/></emitter></shape>"#,
+        ),
+    );
+    assert!(l.scene.geometry.meshes().is_empty());
+    let Shape::Parallelogram(q) = &l.scene.geometry.objects()[0].shape else {
+        panic!("{:?}", l.scene.geometry.objects())
+    };
+    assert!(q.normal().to_vec().approx_eq(Vec3::Z, 1e-6));
+    assert!((q.area() - 1.0).abs() < 1e-6);
+    assert!(matches!(&l.scene.lights[0], Light::Area(a) if a.area == 1.0));
     // A missing file is an error at the file name.
     let e = try_load_with(
         &dir.join("s.xml"),

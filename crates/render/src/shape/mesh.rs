@@ -108,7 +108,71 @@ impl ShearedRay {
     }
 }
 
+/// Most triangles a mesh may have to be taken for parallelograms ([`Mesh::parallelograms`]).
+pub const MAX_PARALLELOGRAM_TRIANGLES: usize = 64;
+
 impl Mesh {
+    /// The mesh as parallelograms, when it is a few of them (up to
+    /// [`MAX_PARALLELOGRAM_TRIANGLES`] triangles): each two consecutive triangles share an edge,
+    /// wind the same way and make a parallelogram (the vertex of one opposite the shared edge
+    /// is the other's mirror image through the edge's midpoint, to 4 ulps of the coordinates),
+    /// and the shading is flat (no vertex normals, or each one along its face's normal).
+    /// A quad of an OBJ or PLY file (walls, floors, boxes and lights) comes as two such
+    /// triangles, which cost twice the intersection tests of one parallelogram. The
+    /// parallelograms cover the same surface with the same normals; their texture
+    /// coordinates are their own, so the caller asks for them only when nothing reads them.
+    /// Each parallelogram starts at the first triangle's vertex opposite the shared edge, its
+    /// edges towards the shared edge's ends in the triangle's winding order (so that v × w
+    /// is the triangles' winding normal).
+    pub fn parallelograms(&self) -> Option<Vec<super::Parallelogram>> {
+        let n = self.indices.len();
+        if n == 0 || !n.is_multiple_of(2) || n > MAX_PARALLELOGRAM_TRIANGLES {
+            return None;
+        }
+        let pos = |i: u32| self.positions.get(i as usize).copied();
+        let mut out = Vec::with_capacity(n / 2);
+        for pair in self.indices.chunks_exact(2) {
+            let (t1, t2) = (pair[0], pair[1]);
+            // The vertex of t1 not in t2, first, and t1's other two in its winding order.
+            let k = (0..3).find(|&k| !t2.contains(&t1[k]))?;
+            let [x, e1, e2] = [t1[k], t1[(k + 1) % 3], t1[(k + 2) % 3]];
+            if !(t2.contains(&e1) && t2.contains(&e2)) || e1 == e2 || x == e1 || x == e2 {
+                return None;
+            }
+            let y = *t2.iter().find(|&&i| i != e1 && i != e2)?;
+            // t2 runs the shared edge the other way (e2 before e1) when both wind alike.
+            let j = t2.iter().position(|&i| i == e2)?;
+            if t2[(j + 1) % 3] != e1 {
+                return None;
+            }
+            let (px, p1, p2, py) = (pos(x)?, pos(e1)?, pos(e2)?, pos(y)?);
+            let (v, w) = (p1 - px, p2 - px);
+            let far = p1 + (p2 - px);
+            let scale = [px, p1, p2, py]
+                .iter()
+                .flat_map(|p| [p.x.abs(), p.y.abs(), p.z.abs()])
+                .fold(0.0f32, f32::max);
+            let gap = py - far;
+            let tol = 4.0 * f32::EPSILON * scale;
+            if !(gap.x.abs() <= tol && gap.y.abs() <= tol && gap.z.abs() <= tol) {
+                return None;
+            }
+            let q = super::Parallelogram::new(px, v, w)?;
+            if !self.normals.is_empty() {
+                let n = q.normal().to_vec();
+                for i in [x, e1, e2, y] {
+                    let ns = self.normals.get(i as usize)?.to_vec();
+                    let len = ns.norm();
+                    if !(ns.dot(n) >= (1.0 - 1e-6) * len) {
+                        return None;
+                    }
+                }
+            }
+            out.push(q);
+        }
+        Some(out)
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.indices.len()
@@ -642,5 +706,125 @@ mod tests {
             ..m.clone()
         };
         assert!(big.faces().is_none() && m.faces().is_some());
+    }
+
+    /// A quad as two triangles, from the corners in order and how they are split.
+    fn quad(corners: [Point3; 4], indices: [[u32; 3]; 2]) -> Mesh {
+        Mesh {
+            positions: corners.to_vec(),
+            indices: indices.to_vec(),
+            ..Mesh::default()
+        }
+    }
+
+    /// Quads of two triangles become parallelograms over the same surface, facing the same
+    /// way: rays hit both or neither (away from the edges), at the same distance, and the
+    /// parallelogram's normal is the triangles' winding normal; whatever the diagonal and
+    /// the first vertex, and after a rotation that leaves the corners a few ulps off. Shapes
+    /// that are not such quads stay meshes.
+    #[test]
+    fn quads_of_two_triangles_are_parallelograms() {
+        let rot = crate::math::Transform::rotation(Vec3::new(0.3, 1.0, -0.2), 37.0).unwrap();
+        let corners = [
+            Point3::new(-1.0, 0.2, -0.7),
+            Point3::new(0.8, 0.2, -0.7),
+            Point3::new(0.8, 0.2, 0.9),
+            Point3::new(-1.0, 0.2, 0.9),
+        ]
+        .map(|p| rot.point(p));
+        let splits = [
+            [[0, 1, 2], [0, 2, 3]],
+            [[1, 2, 3], [1, 3, 0]],
+            [[2, 0, 1], [3, 0, 2]],
+            // Winding the other way.
+            [[0, 2, 1], [0, 3, 2]],
+        ];
+        let mut rng = crate::sampling::Pcg32::new(4, 4);
+        for split in splits {
+            let m = quad(corners, split);
+            let qs = m.parallelograms().expect("a parallelogram");
+            assert_eq!(qs.len(), 1);
+            let q = &qs[0];
+            let [a, b, c] = m.vertices(0);
+            let wind = (b - a).cross(c - a).normalize();
+            assert!(q.normal().to_vec().dot(wind) > 0.999_999);
+            let (mut hits, mut checked) = (0, 0);
+            for _ in 0..4000 {
+                let o = Point3::new(
+                    rng.next_f32() * 6.0 - 3.0,
+                    rng.next_f32() * 6.0 - 3.0,
+                    rng.next_f32() * 6.0 - 3.0,
+                );
+                let target = rot.point(Point3::new(
+                    rng.next_f32() * 2.4 - 1.2,
+                    0.2,
+                    rng.next_f32() * 2.0 - 0.9,
+                ));
+                let ray = Ray::new(o, (target - o).normalize());
+                let sr = ShearedRay::new(&ray);
+                let tri = (0..2)
+                    .filter_map(|i| {
+                        let [a, b, c] = m.vertices(i);
+                        intersect_triangle(a, b, c, &ray, &sr).map(|h| h.t)
+                    })
+                    .reduce(f32::min);
+                let par = q.intersect(&ray).map(|h| h.t);
+                // Away from the edges (the target's plane coordinates).
+                let local = rot.inv_point(target);
+                let near_edge = [local.x + 1.0, 0.8 - local.x, local.z + 0.7, 0.9 - local.z]
+                    .iter()
+                    .any(|d| d.abs() < 1e-3);
+                if near_edge {
+                    continue;
+                }
+                checked += 1;
+                match (tri, par) {
+                    (Some(t1), Some(t2)) => {
+                        hits += 1;
+                        // Both distances carry f32 round-off, which grows as the ray grazes
+                        // the plane (1/|cos θ|).
+                        let cos = ray.d.dot(wind).abs();
+                        assert!((t1 - t2).abs() <= 1e-5 * t1.max(1.0) / cos, "{t1} {t2}");
+                    }
+                    (None, None) => {}
+                    other => panic!("{other:?} for {ray:?}"),
+                }
+            }
+            assert!(hits > 1000 && checked > 3500, "{hits} of {checked}");
+        }
+        // Two quads in one mesh.
+        let mut two = quad(corners, splits[0]);
+        two.positions
+            .extend(corners.map(|p| p + Vec3::new(0.0, 3.0, 0.0)));
+        two.indices.extend([[4, 5, 6], [4, 6, 7]]);
+        assert_eq!(two.parallelograms().map(|q| q.len()), Some(2));
+
+        // Not parallelograms: a trapezoid, triangles winding against each other, triangles
+        // sharing no edge, an odd count, smooth normals, too many triangles.
+        let mut trapezoid = corners;
+        trapezoid[2] = rot.point(Point3::new(0.5, 0.2, 0.9));
+        assert!(quad(trapezoid, splits[0]).parallelograms().is_none());
+        assert!(quad(corners, [[0, 1, 2], [0, 3, 2]])
+            .parallelograms()
+            .is_none());
+        assert!(quad(corners, [[0, 1, 2], [3, 3, 3]])
+            .parallelograms()
+            .is_none());
+        let mut odd = quad(corners, splits[0]);
+        odd.indices.push([0, 1, 2]);
+        assert!(odd.parallelograms().is_none());
+        let mut smooth = quad(corners, splits[0]);
+        let n = smooth.parallelograms().unwrap()[0].normal();
+        smooth.normals = vec![n; 4];
+        assert!(smooth.parallelograms().is_some(), "flat normals are fine");
+        smooth.normals[2] = (n.to_vec() + Vec3::new(0.1, 0.0, 0.0))
+            .normalize()
+            .to_normal();
+        assert!(smooth.parallelograms().is_none());
+        let mut many = quad(corners, splits[0]);
+        for _ in 0..MAX_PARALLELOGRAM_TRIANGLES / 2 {
+            many.indices.extend([[0, 1, 2], [0, 2, 3]]);
+        }
+        assert!(many.parallelograms().is_none());
     }
 }

@@ -23,7 +23,9 @@ pub use csg::{Csg, CsgError, CsgNode, CsgOp, Solid, MAX_EXPANDED_LEAVES};
 pub use cube::Cube;
 pub use cylinder::Cylinder;
 pub use disk::Disk;
-pub use mesh::{intersect_triangle, Face, Mesh, ShearedRay, FACE_TRIANGLES};
+pub use mesh::{
+    intersect_triangle, Face, Mesh, ShearedRay, FACE_TRIANGLES, MAX_PARALLELOGRAM_TRIANGLES,
+};
 pub use parallelogram::Parallelogram;
 pub use plane::Plane;
 pub use polygon::{Polygon, PolygonError};

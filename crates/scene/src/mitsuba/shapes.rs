@@ -342,7 +342,7 @@ impl<'t> Loader<'t> {
         mesh.props.emission = emission;
         self.triangles += mesh.len();
         self.mesh_bytes += crate::mesh::bytes_per_triangle(&mesh) * mesh.len() as f64;
-        self.scene.add_mesh(mesh);
+        self.scene.add_mesh_or_parallelograms(mesh);
     }
 }
 
