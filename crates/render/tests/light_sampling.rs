@@ -831,3 +831,40 @@ fn irradiance_matches_closed_forms() {
     println!("{}", lines.join("\n"));
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A sphere light's cone samples name a point on the sphere, facing the shading point, along
+/// the sampled direction, with a unit normal: from near the surface to a thousand radii away.
+#[test]
+fn sphere_cone_samples_land_on_the_sphere() {
+    let s = scene(Emitter::Sphere, false);
+    let (c, r) = sphere_place();
+    let light = &s.lights[0];
+    let mut rng = Pcg32::new(12, 3);
+    for dist in [1.02f32, 1.5, 4.0, 30.0, 1000.0] {
+        for _ in 0..500 {
+            let dir = Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            )
+            .normalize();
+            let p = c + dir * (r * dist);
+            let u = [rng.next_f32(), rng.next_f32()];
+            let ls = light
+                .sample(&s.geometry, &s.emissions, p, u, &Wavelengths::Rgb)
+                .expect("a sample from outside");
+            let Target::Surface(q, n) = ls.target else {
+                panic!("a point on the sphere")
+            };
+            // Round-off grows with the distance (the point is found from p, |p − c| = dist·r).
+            let scale = 2e-6 * dist.max(1.0);
+            assert!(((q - c).norm() - r).abs() <= scale * r, "{dist}: {q:?}");
+            assert!((n.to_vec().norm() - 1.0).abs() <= scale, "{dist}: {n:?}");
+            assert!(n.to_vec().dot(-ls.wi) > 0.0, "{dist}: faces away");
+            assert!((ls.wi.norm() - 1.0).abs() < 1e-5);
+            let to = q - p;
+            assert!(to.cross(ls.wi).norm() <= scale * to.norm().max(r), "{dist}");
+            assert!(to.dot(ls.wi) > 0.0);
+        }
+    }
+}

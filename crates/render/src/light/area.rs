@@ -240,20 +240,23 @@ impl AreaLight {
                 // Sample the cone of directions the sphere subtends (1 − cos θ_max from
                 // sin²θ_max = r²/d², exact for the tiny cones of small, distant spheres).
                 let one_minus_cos = warp::one_minus_cos_from_sin2(r * r / d2);
-                let axis = (*c - p) / d2.sqrt();
+                let d = d2.sqrt();
+                let axis = (*c - p) / d;
                 let frame = crate::math::Frame::from_normal(axis.to_normal());
-                let wi = frame
-                    .to_world(warp::square_to_uniform_cone_narrow(u, one_minus_cos))
-                    .normalize();
+                // (Unit to round-off: a unit vector in an orthonormal frame. The sample waits
+                // on a chain of square roots and divisions; nothing is added to it that the
+                // geometry gives otherwise.)
+                let wi = frame.to_world(warp::square_to_uniform_cone_narrow(u, one_minus_cos));
                 // Where the direction meets the sphere, in world space (the sphere is round
-                // there): along wi, the centre is at (c − p)·wi, the ray passes at h² =
-                // d² − ((c − p)·wi)² from it and enters √(r² − h²) before (the tangent point at
-                // the silhouette, where round-off may make r² − h² negative); the point is put
-                // back on the sphere along its normal.
-                let along = (*c - p).dot(wi);
-                let h2 = (d2 - along * along).max(0.0);
-                let t = along - (r * r - h2).max(0.0).sqrt();
-                let n = (p + wi * t - *c).normalize();
+                // there), from the sampled angle θ off the axis (a = 1 − cos θ, as the cone
+                // sample draws it): along wi the centre is at d·cos θ, the ray passes at
+                // h² = d²·sin²θ = d²·a(2 − a) from it and enters √(r² − h²) before (the tangent
+                // point at the silhouette, where round-off may make r² − h² negative). The
+                // normal is the point's offset from the centre over the radius.
+                let a = u[0] * one_minus_cos;
+                let h2 = d2 * (a * (2.0 - a));
+                let t = d * (1.0 - a) - (r * r - h2).max(0.0).sqrt();
+                let n = (p + wi * t - *c) * (1.0 / *r);
                 let q = *c + n * *r;
                 // A uniform radiance reads no texture coordinates.
                 let uv = if emission.radiance.is_constant() {
