@@ -467,7 +467,7 @@ fn surface_interaction(
         ns: g.ns,
         uv: g.uv,
         dpdu: g.dpdu,
-        wo: -ray.d.normalize(),
+        wo: -unit(ray.d),
         t: hit.t,
         prim: hit.prim,
         props,
@@ -475,10 +475,42 @@ fn surface_interaction(
     }
 }
 
+/// `d` normalised, or `d` itself when its squared length is within 2⁻²⁰ of 1 (the path
+/// tracer's rays, unit to round-off): no square root and division on the way from a hit to
+/// its shading, and a direction unit to the same round-off.
+#[inline(always)]
+fn unit(d: crate::math::Vec3) -> crate::math::Vec3 {
+    let l2 = d.squared_norm();
+    if (l2 - 1.0).abs() <= 1.0 / 1_048_576.0 {
+        d
+    } else {
+        d.normalize()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::{Point3, Vec3};
+
+    /// The outgoing direction is unit whatever the ray's length: directions unit to
+    /// round-off are kept as they are, others normalised.
+    #[test]
+    fn outgoing_directions_are_unit() {
+        let d = Vec3::new(0.6, 0.8, 0.0);
+        assert_eq!(unit(d), d);
+        let nearly = Vec3::new(0.6f32.next_up(), 0.8, 0.0);
+        assert_eq!(unit(nearly), nearly);
+        for d in [
+            Vec3::new(3.0, -4.0, 12.0),
+            Vec3::new(1e-3, 2e-3, 0.0),
+            Vec3::new(0.6, 0.8, 0.01),
+        ] {
+            let u = unit(d);
+            assert!((u.norm() - 1.0).abs() < 1e-6, "{d:?}: {u:?}");
+            assert!(u.cross(d).norm() < 1e-6 * d.norm());
+        }
+    }
     use crate::shape::{Cube, Parallelogram};
 
     /// A parallelogram's hit resolved in the caller is the general path's interaction, bit for
