@@ -387,7 +387,8 @@ fn check_runs(scene: &Scene, runs: &[Run], spp: u32, spectral: bool) {
     assert!(lit > 0, "{runs:?}: nothing lit, nothing compared");
 }
 
-/// How one path alone is traced: [`Path::radiance`] or [`Path::radiance_through_bsdfs`].
+/// How one path alone is traced: [`Path::radiance`], or [`Path::radiance_alone`] with mirrors
+/// and glass through their BSDFs.
 type Single = fn(
     &Path,
     &Scene,
@@ -607,7 +608,9 @@ fn mirror_and_glass_vertices_agree_with_the_bsdfs_route() {
             .collect();
         for run in runs {
             let (out, singles, labels) =
-                batch_and_singles(&scene, &[run], 64, spectral, Path::radiance_through_bsdfs);
+                batch_and_singles(&scene, &[run], 64, spectral, |p, s, r, l, sm, st| {
+                    p.radiance_alone(s, r, l, sm, st, false)
+                });
             let (mut same, mut lit) = (0, 0);
             let (mut sum_a, mut sum_b) = (0.0f64, 0.0f64);
             for k in 0..out.len() {

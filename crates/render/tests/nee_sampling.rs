@@ -443,15 +443,9 @@ fn a_sole_light_beside_a_constant_sky_is_always_picked() {
     }
 }
 
-/// A diffuse plane lit by three point lights only: every vertex samples every light (no
-/// choice among them), so a camera ray hitting the plane gets the exact direct illumination
-/// ρ/π · Σ I·cos θ / d², whatever the sample, and nothing else (a plane sends no light back to
-/// itself).
-#[test]
-fn every_delta_light_gives_the_exact_direct_illumination() {
-    use candela_render::integrator::{Integrator, Path};
-    use candela_render::sampling::{Sampler, SamplerKind};
-    let rho = 0.6;
+/// A diffuse plane z = 0 of reflectance `rho` lit by the point lights `points` (position,
+/// intensity), with the plane's material.
+fn plane_under_points(rho: f32, points: &[(Point3, Rgb)]) -> (SceneBuilder, u32) {
     let mut b = SceneBuilder::new();
     let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(rho))));
     let plane = Parallelogram::new(
@@ -461,12 +455,7 @@ fn every_delta_light_gives_the_exact_direct_illumination() {
     )
     .expect("plane");
     b.add_shape(Shape::Parallelogram(plane), m, None);
-    let lights = [
-        (Point3::new(0.5, 0.2, 1.0), Rgb::new(2.0, 1.0, 0.5)),
-        (Point3::new(-1.5, 0.7, 2.0), Rgb::new(1.0, 3.0, 1.0)),
-        (Point3::new(0.1, -2.0, 0.6), Rgb::new(0.5, 0.5, 4.0)),
-    ];
-    for (position, intensity) in lights {
+    for &(position, intensity) in points {
         b.add_light(Light::Point(
             PointLight {
                 position,
@@ -477,16 +466,41 @@ fn every_delta_light_gives_the_exact_direct_illumination() {
             Components::from_intensity(intensity),
         ));
     }
-    let scene = b.build(AccelKind::Bvh);
-    let mut expected = [0f64; 3];
-    for (q, i) in lights {
-        let to = q.to_vec();
+    (b, m)
+}
+
+/// The irradiance the point lights `points` give the point `p` of the plane z = 0:
+/// Σ I·cos θ / d².
+fn points_irradiance(p: Point3, points: &[(Point3, Rgb)]) -> [f64; 3] {
+    let mut e = [0f64; 3];
+    for &(q, i) in points {
+        let to = q - p;
         let d2 = to.squared_norm() as f64;
         let cos = to.z as f64 / d2.sqrt();
-        for (e, c) in expected.iter_mut().zip([i.r, i.g, i.b]) {
-            *e += rho as f64 / std::f64::consts::PI * c as f64 * cos / d2;
+        for (e, c) in e.iter_mut().zip([i.r, i.g, i.b]) {
+            *e += c as f64 * cos / d2;
         }
     }
+    e
+}
+
+/// A diffuse plane lit by three point lights only: every vertex samples every light (no
+/// choice among them), so a camera ray hitting the plane gets the exact direct illumination
+/// ρ/π · Σ I·cos θ / d², whatever the sample, and nothing else (a plane sends no light back to
+/// itself).
+#[test]
+fn every_delta_light_gives_the_exact_direct_illumination() {
+    use candela_render::integrator::{Integrator, Path};
+    use candela_render::sampling::{Sampler, SamplerKind};
+    let rho = 0.6;
+    let lights = [
+        (Point3::new(0.5, 0.2, 1.0), Rgb::new(2.0, 1.0, 0.5)),
+        (Point3::new(-1.5, 0.7, 2.0), Rgb::new(1.0, 3.0, 1.0)),
+        (Point3::new(0.1, -2.0, 0.6), Rgb::new(0.5, 0.5, 4.0)),
+    ];
+    let scene = plane_under_points(rho, &lights).0.build(AccelKind::Bvh);
+    let expected =
+        points_irradiance(Point3::ORIGIN, &lights).map(|e| rho as f64 / std::f64::consts::PI * e);
     let path = Path {
         max_depth: Some(8),
         rr_depth: 5,
@@ -525,16 +539,13 @@ fn every_light_with_a_rectangle_gives_the_direct_illumination() {
     use candela_render::integrator::{Integrator, Path};
     use candela_render::sampling::{Sampler, SamplerKind};
     let rho = 0.6;
-    let mut b = SceneBuilder::new();
-    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(rho))));
+    // Below the light's plane.
+    let points = [
+        (Point3::new(0.6, 0.2, 0.4), Rgb::new(0.2, 0.1, 0.05)),
+        (Point3::new(-0.8, -0.5, 0.3), Rgb::new(0.1, 0.3, 0.1)),
+    ];
+    let (mut b, _) = plane_under_points(rho, &points);
     let black = b.add_material(Material::diffuse(Texture::Uniform(Rgb::splat(0.0))));
-    let plane = Parallelogram::new(
-        Point3::new(-50.0, -50.0, 0.0),
-        Vec3::new(100.0, 0.0, 0.0),
-        Vec3::new(0.0, 100.0, 0.0),
-    )
-    .expect("plane");
-    b.add_shape(Shape::Parallelogram(plane), m, None);
     // 2 × 1.6 at z = 0.5, facing down (v × w points to −z): from the point seen below it, a
     // wide light, which BSDF sampling finds as often as light sampling does.
     let (corner, v, w) = (
@@ -550,34 +561,10 @@ fn every_light_with_a_rectangle_gives_the_direct_illumination() {
         two_sided: false,
     });
     b.add_shape(Shape::Parallelogram(light), black, Some(e));
-    // Below the light's plane.
-    let points = [
-        (Point3::new(0.6, 0.2, 0.4), Rgb::new(0.2, 0.1, 0.05)),
-        (Point3::new(-0.8, -0.5, 0.3), Rgb::new(0.1, 0.3, 0.1)),
-    ];
-    for (position, intensity) in points {
-        b.add_light(Light::Point(
-            PointLight {
-                position,
-                intensity,
-                spectrum: None,
-                falloff: Falloff::INVERSE_SQUARE,
-            },
-            Components::from_intensity(intensity),
-        ));
-    }
     let scene = b.build(AccelKind::Bvh);
     // The point seen, below the light, by a ray passing under it.
     let p = Point3::new(0.1, 0.05, 0.0);
-    let mut irradiance = [0f64; 3];
-    for (q, i) in points {
-        let to = q - p;
-        let d2 = to.squared_norm() as f64;
-        let cos = to.z as f64 / d2.sqrt();
-        for (e, c) in irradiance.iter_mut().zip([i.r, i.g, i.b]) {
-            *e += c as f64 * cos / d2;
-        }
-    }
+    let mut irradiance = points_irradiance(p, &points);
     // The rectangle: ∫ L cos θp cos θl / r² dA, by the midpoint rule on 400 × 400 cells.
     let n = 400;
     let area = (v.norm() * w.norm()) as f64;

@@ -576,7 +576,7 @@ impl Integrator for Path {
         sampler: &mut Sampler,
         stats: &mut RayStats,
     ) -> SampledSpectrum {
-        self.radiance_with(scene, camera_ray, lambda, sampler, stats, true)
+        self.radiance_alone(scene, camera_ray, lambda, sampler, stats, true)
     }
 
     fn radiance_batch(
@@ -597,24 +597,12 @@ impl Integrator for Path {
 }
 
 impl Path {
-    /// [`Integrator::radiance`] with mirrors and smooth glass shaded through their BSDFs and
-    /// shading frames, as every other surface is, instead of by [`Path::delta_vertex`]: for
-    /// tests, which check that the two agree (within rounding: the directions differ in their
-    /// last bits).
+    /// One path alone ([`Integrator::radiance`]). `delta`: mirrors and smooth glass are shaded
+    /// by [`Path::delta_vertex`], as in the renderer; without, through their BSDFs and shading
+    /// frames as every other surface is, for tests, which check that the two agree (within
+    /// rounding: the directions differ in their last bits).
     #[doc(hidden)]
-    pub fn radiance_through_bsdfs(
-        &self,
-        scene: &Scene,
-        camera_ray: &Ray,
-        lambda: &mut Wavelengths,
-        sampler: &mut Sampler,
-        stats: &mut RayStats,
-    ) -> SampledSpectrum {
-        self.radiance_with(scene, camera_ray, lambda, sampler, stats, false)
-    }
-
-    /// One path alone; `delta`: shade mirrors and smooth glass by [`Path::delta_vertex`].
-    fn radiance_with(
+    pub fn radiance_alone(
         &self,
         scene: &Scene,
         camera_ray: &Ray,
