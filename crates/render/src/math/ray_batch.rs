@@ -20,6 +20,11 @@ pub struct RayBatch {
     pub tmax: [f32; BATCH],
     /// Bit i set when lane i holds a ray.
     pub active: u32,
+    /// Bit i set when lane i may go down a deep tree in a packet with other such lanes of
+    /// the same direction octant (a pixel's camera rays, the shadow rays of its first hits):
+    /// the caller's hint, clear for rays from scattered points, which a packet would take
+    /// through the union of their nodes. The hits are the same either way. All set by default.
+    pub coherent: u32,
 }
 
 impl Default for RayBatch {
@@ -30,6 +35,7 @@ impl Default for RayBatch {
             tmin: [0.0; BATCH],
             tmax: [0.0; BATCH],
             active: 0,
+            coherent: u32::MAX,
         }
     }
 }

@@ -210,7 +210,7 @@ impl Bvh {
         let active = if self.root.meta != 0 || level.min(SimdLevel::supported()) < PACKET_LEVEL {
             0
         } else {
-            rays.active
+            rays.active & rays.coherent
         };
         Coherence::groups(rays, active)
     }
@@ -520,10 +520,16 @@ mod tests {
             let mut rng = Pcg32::new(5, 6);
             let (mut grouped, mut hits_seen, mut blocked_seen) = ([0; 3], 0, 0);
             for k in 0..600 {
-                let rays = grouped_batch(&mut rng, k);
+                let mut rays = grouped_batch(&mut rng, k);
+                if k % 3 == 2 {
+                    // The caller's hint: only these lanes may go in packets.
+                    rays.coherent = rng.next_u32();
+                }
                 let groups = Coherence::groups(&rays, rays.active);
                 grouped[groups.len] += 1;
                 for &level in &levels {
+                    let taken = bvh.packets_for(level, &rays).lanes();
+                    assert_eq!(taken & !rays.coherent, 0, "packets only of coherent lanes");
                     let mut st = RayStats::default();
                     let mut hits = [None; BATCH];
                     bvh.intersect_batch_at(level, &g, &rays, &mut hits, &mut st);

@@ -708,6 +708,8 @@ impl Path {
                 }
                 next += m;
                 alive = (1u32 << m) - 1;
+                // Camera rays: a pixel's, coherent.
+                batch.coherent = u32::MAX;
             }
             batch.active = alive;
             scene.intersect_batch(&batch, &mut hits, stats);
@@ -717,6 +719,13 @@ impl Path {
             }
             let mut ended = 0u32;
             lambert.lanes = 0;
+            // The lanes shading their first hit: their shadow rays (a pixel's, towards one
+            // light) go down a deep tree as packets; a deeper vertex's rays are incoherent
+            // (see `RayBatch::coherent`).
+            let mut first = 0u32;
+            for i in lanes(alive) {
+                first |= ((st[i].depth == 0) as u32) << i;
+            }
             for i in lanes(alive) {
                 let s = slot[i];
                 let sampler = &mut samplers[samplers_of[s] as usize];
@@ -750,6 +759,10 @@ impl Path {
                     ended |= 1 << i;
                 }
             }
+            for s in &mut shadows {
+                s.coherent = first;
+            }
+            batch.coherent = 0;
             if lambert.lanes != 0 {
                 lambert.shade(&mut batch, &mut shadows, &mut pending);
                 for i in lanes(lambert.lanes) {
