@@ -151,9 +151,43 @@ fn lossless_materials_vanish_in_a_white_furnace() {
     }
 }
 
+/// Without a depth limit the roulette still ends every path, even where nothing is absorbed:
+/// the camera inside a closed sphere of albedo 1 keeps β = 1 at every bounce, which a survival
+/// probability min(β·Πη², 1) would never stop. Capped at 0.95 when the length is unlimited,
+/// a path makes 1/0.05 = 20 bounces past `rr_depth` on average. With a depth limit the cap is 1,
+/// and the limit ends the paths. No emission: the image is black either way.
+#[test]
+fn unlimited_paths_end_where_nothing_is_absorbed() {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
+    b.add_shape(
+        Shape::Sphere(Sphere::new(Transform::scaling(Vec3::new(3.0, 3.0, 3.0)))),
+        m,
+        None,
+    );
+    b.camera(Camera::perspective(1.0, 4.0 / 3.0, Transform::IDENTITY));
+    let scene = b.build(AccelKind::Bvh);
+    for (max_depth, rr_depth, most) in [(None, 2, 2.0 + 20.0), (Some(40), 2, 40.0)] {
+        let path = Path {
+            max_depth,
+            rr_depth,
+            hide_emitters: false,
+        };
+        let out = render(&scene, &path, &settings(4), &|_| {});
+        assert!(out.image.pixels().iter().all(|p| p.r == 0.0));
+        // Camera and bounce rays per sample (no light: no shadow rays).
+        let samples = (out.image.width() * out.image.height() * 4) as f64;
+        let per_sample = out.stats.rays as f64 / samples;
+        assert!(
+            per_sample > 0.8 * most && per_sample < 1.2 * most,
+            "max_depth {max_depth:?}: {per_sample} rays per path, expected {most}"
+        );
+    }
+}
+
 /// Russian roulette inside glass: clear glass in a white furnace, roulette from the first
 /// bounce. Radiance entering the glass is compressed by 1/η² and expanded again on the way out,
-/// so the roulette must look at β·Πη² (≈ 1 all along a lossless path: survival 0.95), not at β
+/// so the roulette must look at β·Πη² (≈ 1 all along a lossless path: survival 1), not at β
 /// alone (≈ 0.44 inside) nor β/Πη² (≈ 0.2, whose survivors count five times: fireflies). Every
 /// pixel is 1 in expectation; at 64 spp the pixels must also stay close to it (the image is
 /// deterministic: same seed, same pixels).
@@ -197,7 +231,8 @@ fn roulette_inside_glass_keeps_the_variance_low() {
         / n)
         .sqrt();
     assert!((mean - 1.0).abs() < 0.03, "mean {mean}");
-    // 0.008 with survival min(β·Πη², 0.95); the old rule, min(β/Πη², 0.95), gave 0.05.
+    // 5e-8 with survival min(β·Πη², 1) (0.008 with the cap at 0.95); the old rule,
+    // min(β/Πη², 0.95), gave 0.05.
     assert!(rms < 0.02, "pixels scatter around 1 by {rms}");
 }
 

@@ -81,6 +81,9 @@ pub(super) struct LambertLanes {
     u_rr: L,
     roulette: u32,
     eta_scale: L,
+    /// The path length is unlimited: the roulette's survival probability is capped at 0.95
+    /// (see `Path::roulette`).
+    pub(super) unbounded: bool,
     // Outputs.
     /// Lanes whose path goes on, with the direction's density `pdf` and throughput
     /// `beta_out`.
@@ -617,7 +620,8 @@ impl WideKernel for Shade<'_> {
             wi[k] = w.add(w.add(w.mul(s[k], dx), w.mul(tt[k], dy)), w.mul(n[k], lz));
             ok = w.and(ok, finite(w, wi[k]));
         }
-        // The throughput, and Russian roulette: q = min(max(w, β)·Πη², 0.95).
+        // The throughput, and Russian roulette: q = min(max(w, β)·Πη², 1), or 0.95 when the
+        // path length is unlimited.
         let mut b = [zero; 4];
         let mut b_nonzero = w.mask(0);
         for k in 0..4 {
@@ -628,7 +632,8 @@ impl WideKernel for Shade<'_> {
         ok = w.and(ok, b_nonzero);
         let m = max(w, max(w, b[0], b[1]), max(w, b[2], b[3]));
         let q = w.mul(m, w.load(&x.eta_scale));
-        let q = w.select(w.lt(w.splat(0.95), q), w.splat(0.95), q);
+        let cap = w.splat(if x.unbounded { 0.95 } else { 1.0 });
+        let q = w.select(w.lt(cap, q), cap, q);
         let roulette = w.mask(x.roulette);
         let survive = w.lt(w.load(&x.u_rr), q);
         ok = w.and(ok, w.or(w.and_not(all, roulette), survive));
