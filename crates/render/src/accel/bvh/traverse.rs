@@ -39,7 +39,7 @@ impl Bvh {
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
         let mut q = AnyQuery {
             geometry,
-            ray,
+            ray: *ray,
             tri: TriRay::new(ray, !self.tris.is_empty()),
             block: BlockRay::new(ray),
             tests: 0,
@@ -113,7 +113,7 @@ impl Bvh {
     ) -> bool {
         let mut q = AnyQuery {
             geometry,
-            ray,
+            ray: *ray,
             tri: TriRay::new(ray, self.leaf_needs_sheared_ray(r)),
             block: BlockRay::new(ray),
             tests: 0,
@@ -454,7 +454,10 @@ fn lanes(n: u32, k: usize) -> u32 {
 
 struct AnyQuery<'a> {
     geometry: &'a Geometry,
-    ray: &'a Ray,
+    /// The ray, copied as [`ClosestQuery`] copies it: read through a reference, its `tmax`
+    /// was loaded again at every node (camera rays' any-hit queries on the 1M-triangle
+    /// bench: 0.94× the time with the copy).
+    ray: Ray,
     tri: TriRay,
     block: BlockRay,
     tests: u64,
@@ -485,7 +488,7 @@ impl Query for AnyQuery<'_> {
             self.tests += n as u64;
         } else if r.meta & !COUNT_MASK != OBJ_LEAF {
             for k in 0..n.div_ceil(4) as usize {
-                let (h, _) = bvh.block_test(r.meta, first + k, &self.block, self.ray);
+                let (h, _) = bvh.block_test(r.meta, first + k, &self.block, &self.ray);
                 if h.mask & lanes(n, k) != 0 {
                     self.tests += (n as u64).min(4 * k as u64 + 4);
                     return true;
@@ -496,7 +499,7 @@ impl Query for AnyQuery<'_> {
             for (k, &id) in bvh.ids[first..first + n as usize].iter().enumerate() {
                 if self
                     .geometry
-                    .intersect_prim(id, self.ray, &self.tri.sr)
+                    .intersect_prim(id, &self.ray, &self.tri.sr)
                     .is_some()
                 {
                     self.tests += k as u64 + 1;
