@@ -5,8 +5,13 @@
 //! the BVH's (Embree's only by primitive, its triangle test being another one).
 //!
 //! `cargo run --release -p candela-render [--features embree] --example accel_compare --
-//! [mesh|spheres|cornell|all] [--subdiv N] [--spheres N] [--rays N] [--repeat R]
+//! [mesh|bounce|spheres|cornell|all] [--subdiv N] [--spheres N] [--rays N] [--repeat R]
 //! [--accel bvh,embree,...] [--threads 1|all|both] [--set camera|random|both]`
+//!
+//! `bounce` (also part of `mesh`): a path tracer's first-bounce rays on the bumpy sphere, sixteen
+//! from each camera ray's hit in cosine-distributed directions (a pixel's samples), one thread,
+//! ray by ray through the BVH and Embree, and with the `embree` feature sixteen at a time
+//! through Embree's hybrid packet traversal (`rtcIntersect16`, as Mitsuba traces them).
 //!
 //! Rays/s are the best of R passes; the structures take turns within each pass so that a
 //! busy machine slows all of them alike.
@@ -233,6 +238,9 @@ fn main() {
         println!("\n(mesh generated in {:.2} s)", t.elapsed().as_secs_f64());
         bench(&b, &kinds, repeat, &threads, &only);
     }
+    if which == "all" || which == "mesh" || which == "bounce" {
+        bounce(num("--subdiv", 289) as u32, rays, repeat);
+    }
     if which == "all" || which == "spheres" {
         bench(
             &scenes::spheres_bench(num("--spheres", 10_000), rays),
@@ -249,6 +257,79 @@ fn main() {
             repeat,
             &threads,
             &only,
+        );
+    }
+}
+
+/// The `bounce` comparison (see the module's documentation).
+fn bounce(subdiv: u32, n: usize, repeat: usize) {
+    let b = scenes::mesh_bench(subdiv, n / 16);
+    let g = &b.geometry;
+    let bvh = Accel::build(AccelKind::Bvh, g);
+    let mut st = RayStats::default();
+    let mut rng = candela_render::sampling::Pcg32::new(3, 4);
+    let mut rays = Vec::with_capacity(n);
+    for cam in &b.coherent {
+        let Some(hit) = bvh.intersect(g, cam, &mut st) else {
+            continue;
+        };
+        let si = g.interaction(cam, &hit);
+        let n = if si.n.to_vec().dot(cam.d) > 0.0 {
+            -si.n
+        } else {
+            si.n
+        };
+        let frame = candela_render::math::Frame::from_normal(n);
+        for _ in 0..16 {
+            let local = candela_render::sampling::warp::square_to_cosine_hemisphere([
+                rng.next_f32(),
+                rng.next_f32(),
+            ]);
+            rays.push(Ray::spawn_unit(si.p, n, frame.to_world(local)));
+        }
+    }
+    println!(
+        "\n== bounce: {} first-bounce rays (16 per camera hit) on the mesh, 1 thread",
+        rays.len()
+    );
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let time = |f: &(dyn Fn() -> usize + Sync)| {
+        let mut best = f64::INFINITY;
+        let mut hits = 0;
+        for _ in 0..repeat {
+            let t = Instant::now();
+            hits = one.install(f);
+            best = best.min(t.elapsed().as_secs_f64());
+        }
+        (rays.len() as f64 / best / 1e6, hits)
+    };
+    let (bvh_rate, bvh_hits) = time(&|| {
+        let mut st = RayStats::default();
+        rays.iter()
+            .filter(|r| bvh.intersect(g, r, &mut st).is_some())
+            .count()
+    });
+    println!("    Bvh ray by ray        {bvh_rate:8.3} Mrays/s ({bvh_hits} hits)");
+    #[cfg(feature = "embree")]
+    {
+        let e = candela_render::accel::Embree::build(g);
+        let (one_rate, one_hits) = time(&|| {
+            let mut st = RayStats::default();
+            rays.iter()
+                .filter(|r| e.intersect(g, r, &mut st).is_some())
+                .count()
+        });
+        let (k_rate, k_hits) = time(&|| e.intersect16(&rays).iter().flatten().count());
+        println!(
+            "    Embree ray by ray     {one_rate:8.3} Mrays/s ({one_hits} hits)   Bvh {:.2}x",
+            bvh_rate / one_rate
+        );
+        println!(
+            "    Embree 16 (hybrid)    {k_rate:8.3} Mrays/s ({k_hits} hits)   Bvh {:.2}x",
+            bvh_rate / k_rate
         );
     }
 }
