@@ -10,8 +10,10 @@
 //!
 //! `bounce` (also part of `mesh`): a path tracer's first-bounce rays on the bumpy sphere, sixteen
 //! from each camera ray's hit in cosine-distributed directions (a pixel's samples), one thread,
-//! ray by ray through the BVH and Embree, and with the `embree` feature sixteen at a time
-//! through Embree's hybrid packet traversal (`rtcIntersect16`, as Mitsuba traces them).
+//! ray by ray and in batches of sixteen through the BVH, and with the `embree` feature ray by
+//! ray through Embree and sixteen at a time through its hybrid packet traversal
+//! (`rtcIntersect16`, as Mitsuba traces them); random rays and rays that miss the mesh's box
+//! (the cost of a call) as controls.
 //!
 //! Rays/s are the best of R passes; the structures take turns within each pass so that a
 //! busy machine slows all of them alike.
@@ -261,7 +263,8 @@ fn main() {
     }
 }
 
-/// The `bounce` comparison (see the module's documentation).
+/// The `bounce` comparison (see the module's documentation): first-bounce rays, and as
+/// controls random rays from inside the mesh and rays that miss its box (the cost of a call).
 fn bounce(subdiv: u32, n: usize, repeat: usize) {
     let b = scenes::mesh_bench(subdiv, n / 16);
     let g = &b.geometry;
@@ -288,48 +291,77 @@ fn bounce(subdiv: u32, n: usize, repeat: usize) {
             rays.push(Ray::spawn_unit(si.p, n, frame.to_world(local)));
         }
     }
+    let random = scenes::random_rays(candela_render::math::Point3::ORIGIN, 0.6, rays.len());
+    let away: Vec<Ray> = (0..rays.len())
+        .map(|i| {
+            Ray::new(
+                candela_render::math::Point3::new(100.0 + i as f32 * 1e-3, 100.0, 100.0),
+                candela_render::math::Vec3::new(1.0, 0.5, 0.25),
+            )
+        })
+        .collect();
     println!(
-        "\n== bounce: {} first-bounce rays (16 per camera hit) on the mesh, 1 thread",
+        "\n== bounce: {} first-bounce rays (16 per camera hit) on the mesh, Mrays/s, 1 thread",
         rays.len()
     );
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap();
-    let time = |f: &(dyn Fn() -> usize + Sync)| {
+    let rate = |rays: &[Ray], f: &(dyn Fn(&[Ray]) -> usize + Sync)| {
         let mut best = f64::INFINITY;
         let mut hits = 0;
         for _ in 0..repeat {
             let t = Instant::now();
-            hits = one.install(f);
+            hits = one.install(|| f(rays));
             best = best.min(t.elapsed().as_secs_f64());
         }
         (rays.len() as f64 / best / 1e6, hits)
     };
-    let (bvh_rate, bvh_hits) = time(&|| {
-        let mut st = RayStats::default();
-        rays.iter()
-            .filter(|r| bvh.intersect(g, r, &mut st).is_some())
-            .count()
-    });
-    println!("    Bvh ray by ray        {bvh_rate:8.3} Mrays/s ({bvh_hits} hits)");
-    #[cfg(feature = "embree")]
-    {
-        let e = candela_render::accel::Embree::build(g);
-        let (one_rate, one_hits) = time(&|| {
+    let sets: [(&str, &[Ray]); 3] = [
+        ("first bounce", &rays),
+        ("random", &random),
+        ("missing (per call)", &away),
+    ];
+    for (name, set) in sets {
+        let (single, hits) = rate(set, &|rs| {
             let mut st = RayStats::default();
-            rays.iter()
-                .filter(|r| e.intersect(g, r, &mut st).is_some())
+            rs.iter()
+                .filter(|r| bvh.intersect(g, r, &mut st).is_some())
                 .count()
         });
-        let (k_rate, k_hits) = time(&|| e.intersect16(&rays).iter().flatten().count());
-        println!(
-            "    Embree ray by ray     {one_rate:8.3} Mrays/s ({one_hits} hits)   Bvh {:.2}x",
-            bvh_rate / one_rate
-        );
-        println!(
-            "    Embree 16 (hybrid)    {k_rate:8.3} Mrays/s ({k_hits} hits)   Bvh {:.2}x",
-            bvh_rate / k_rate
-        );
+        // Sixteen at a time through the batch entry (packets for any six sharing an octant).
+        let (batch, _) = rate(set, &|rs| {
+            let mut st = RayStats::default();
+            let mut hits = [None; candela_render::math::BATCH];
+            let mut n = 0;
+            for group in rs.chunks(16) {
+                let mut b = candela_render::math::RayBatch::default();
+                for (i, r) in group.iter().enumerate() {
+                    b.set(i, r);
+                }
+                bvh.intersect_batch(g, &b, &mut hits, &mut st);
+                n += hits.iter().flatten().count();
+            }
+            n
+        });
+        print!("    {name:<19} Bvh {single:7.2} (batches of 16: {batch:7.2})");
+        #[cfg(feature = "embree")]
+        {
+            let e = candela_render::accel::Embree::build(g);
+            let (e1, _) = rate(set, &|rs| {
+                let mut st = RayStats::default();
+                rs.iter()
+                    .filter(|r| e.intersect(g, r, &mut st).is_some())
+                    .count()
+            });
+            let (e16, _) = rate(set, &|rs| e.intersect16(rs).iter().flatten().count());
+            print!(
+                "  Embree {e1:7.2}, 16 at a time {e16:7.2}  Bvh {:.2}x, {:.2}x",
+                single / e1,
+                single / e16
+            );
+        }
+        println!("  ({hits} hits)");
     }
 }

@@ -134,6 +134,8 @@ pub struct Embree {
     first_id: Vec<u32>,
     /// The other bounded primitives.
     others: Bvh,
+    /// `others` holds primitives.
+    has_others: bool,
 }
 
 // SAFETY: a committed Embree scene is immutable and Embree documents `rtcIntersect1` and
@@ -164,6 +166,7 @@ impl Clone for Embree {
             scene: self.scene,
             first_id: self.first_id.clone(),
             others: self.others.clone(),
+            has_others: self.has_others,
         }
     }
 }
@@ -259,6 +262,7 @@ impl Embree {
             device,
             scene,
             first_id,
+            has_others: !others.is_empty(),
             others: Bvh::build(geometry, &others),
         }
     }
@@ -286,7 +290,12 @@ impl Embree {
 
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        let mut best = self.others.intersect(geometry, ray, stats);
+        // (Not even entered when empty: its ray setup costs as much as Embree's own call.)
+        let mut best = if self.has_others {
+            self.others.intersect(geometry, ray, stats)
+        } else {
+            None
+        };
         if self.first_id.is_empty() {
             return best;
         }
@@ -368,7 +377,7 @@ impl Embree {
 
     /// True when anything is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        if self.others.occluded(geometry, ray, stats) {
+        if self.has_others && self.others.occluded(geometry, ray, stats) {
             return true;
         }
         if self.first_id.is_empty() {
