@@ -488,10 +488,29 @@ fn points_irradiance(p: Point3, points: &[(Point3, Rgb)]) -> [f64; 3] {
 /// choice among them), so a camera ray hitting the plane gets the exact direct illumination
 /// ρ/π · Σ I·cos θ / d², whatever the sample, and nothing else (a plane sends no light back to
 /// itself).
+/// The RGB radiance of `path` along `ray` for sample `index` (of `spp`) of pixel `index` of an
+/// independent sampler seeded by `seed`: `(seed, index, spp)`.
+fn path_sample(
+    path: &candela_render::integrator::Path,
+    scene: &Scene,
+    ray: &Ray,
+    sampler: &mut candela_render::sampling::Sampler,
+    (seed, index, spp): (u64, u64, u32),
+) -> [f32; 3] {
+    use candela_render::integrator::Integrator;
+    use candela_render::sampling::SamplerKind;
+    sampler.reset_for_pixel(SamplerKind::Independent, seed, index, spp);
+    sampler.pixel_sample(if spp == 1 { 0 } else { index as u32 });
+    let mut lambda = Wavelengths::Rgb;
+    path.radiance(scene, ray, &mut lambda, sampler, &mut RayStats::default())
+        .to_rgb()
+        .to_array()
+}
+
 #[test]
 fn every_delta_light_gives_the_exact_direct_illumination() {
-    use candela_render::integrator::{Integrator, Path};
-    use candela_render::sampling::{Sampler, SamplerKind};
+    use candela_render::integrator::Path;
+    use candela_render::sampling::Sampler;
     let rho = 0.6;
     let lights = [
         (Point3::new(0.5, 0.2, 1.0), Rgb::new(2.0, 1.0, 0.5)),
@@ -509,17 +528,8 @@ fn every_delta_light_gives_the_exact_direct_illumination() {
     let ray = Ray::new(Point3::new(0.0, 0.0, 3.0), Vec3::new(0.0, 0.0, -1.0));
     let mut sampler = Sampler::new(0, 0);
     for index in 0..16 {
-        sampler.reset_for_pixel(SamplerKind::Independent, 9, index, 16);
-        sampler.pixel_sample(index as u32);
-        let mut lambda = Wavelengths::Rgb;
-        let l = path.radiance(
-            &scene,
-            &ray,
-            &mut lambda,
-            &mut sampler,
-            &mut RayStats::default(),
-        );
-        for (c, e) in l.to_rgb().to_array().into_iter().zip(expected) {
+        let l = path_sample(&path, &scene, &ray, &mut sampler, (9, index, 16));
+        for (c, e) in l.into_iter().zip(expected) {
             assert!(
                 ((c as f64) - e).abs() <= 1e-5 * e,
                 "sample {index}: {c} against {e}"
@@ -536,8 +546,8 @@ fn every_delta_light_gives_the_exact_direct_illumination() {
 /// probability taken below 1 on either side, it is not.
 #[test]
 fn every_light_with_a_rectangle_gives_the_direct_illumination() {
-    use candela_render::integrator::{Integrator, Path};
-    use candela_render::sampling::{Sampler, SamplerKind};
+    use candela_render::integrator::Path;
+    use candela_render::sampling::Sampler;
     let rho = 0.6;
     // Below the light's plane.
     let points = [
@@ -598,17 +608,8 @@ fn every_light_with_a_rectangle_gives_the_direct_illumination() {
     let count = 40_000;
     let (mut sum, mut sum2) = ([0f64; 3], [0f64; 3]);
     for index in 0..count {
-        sampler.reset_for_pixel(SamplerKind::Independent, 11, index, 1);
-        sampler.pixel_sample(0);
-        let mut lambda = Wavelengths::Rgb;
-        let l = path.radiance(
-            &scene,
-            &ray,
-            &mut lambda,
-            &mut sampler,
-            &mut RayStats::default(),
-        );
-        for (k, x) in l.to_rgb().to_array().into_iter().enumerate() {
+        let l = path_sample(&path, &scene, &ray, &mut sampler, (11, index, 1));
+        for (k, x) in l.into_iter().enumerate() {
             sum[k] += x as f64;
             sum2[k] += x as f64 * x as f64;
         }

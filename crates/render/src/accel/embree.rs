@@ -134,8 +134,6 @@ pub struct Embree {
     first_id: Vec<u32>,
     /// The other bounded primitives.
     others: Bvh,
-    /// `others` holds primitives.
-    has_others: bool,
 }
 
 // SAFETY: a committed Embree scene is immutable and Embree documents `rtcIntersect1` and
@@ -166,7 +164,6 @@ impl Clone for Embree {
             scene: self.scene,
             first_id: self.first_id.clone(),
             others: self.others.clone(),
-            has_others: self.has_others,
         }
     }
 }
@@ -262,7 +259,6 @@ impl Embree {
             device,
             scene,
             first_id,
-            has_others: !others.is_empty(),
             others: Bvh::build(geometry, &others),
         }
     }
@@ -291,7 +287,7 @@ impl Embree {
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
         // (Not even entered when empty: its ray setup costs as much as Embree's own call.)
-        let mut best = if self.has_others {
+        let mut best = if !self.others.is_empty() {
             self.others.intersect(geometry, ray, stats)
         } else {
             None
@@ -377,7 +373,7 @@ impl Embree {
 
     /// True when anything is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        if self.has_others && self.others.occluded(geometry, ray, stats) {
+        if !self.others.is_empty() && self.others.occluded(geometry, ray, stats) {
             return true;
         }
         if self.first_id.is_empty() {

@@ -64,6 +64,11 @@ impl Bvh {
         (prims, rest)
     }
 
+    /// True when the tree holds no primitive (its root is an empty leaf).
+    pub fn is_empty(&self) -> bool {
+        self.root.meta != 0 && self.root.meta & COUNT_MASK == 0
+    }
+
     /// True when batches test every primitive against all their rays at once (small scenes),
     /// a cost that does not shrink with the number of active lanes.
     pub fn is_flat(&self) -> bool {
@@ -508,6 +513,19 @@ mod tests {
             }
         }
         b
+    }
+
+    #[test]
+    fn only_a_tree_without_primitives_is_empty() {
+        let empty = Geometry::new(Vec::new(), Vec::new());
+        assert!(Bvh::build(&empty, &build_prims(&empty)).is_empty());
+        for n in [1, 30, 300] {
+            let g = geometry(n, 3, false);
+            assert!(
+                !Bvh::build(&g, &build_prims(&g)).is_empty(),
+                "{n} primitives"
+            );
+        }
     }
 
     #[test]

@@ -632,7 +632,7 @@ impl WideKernel for Shade<'_> {
         ok = w.and(ok, b_nonzero);
         let m = max(w, max(w, b[0], b[1]), max(w, b[2], b[3]));
         let q = w.mul(m, w.load(&x.eta_scale));
-        let cap = w.splat(if x.unbounded { 0.95 } else { 1.0 });
+        let cap = w.splat(super::roulette_cap(x.unbounded));
         let q = w.select(w.lt(cap, q), cap, q);
         let roulette = w.mask(x.roulette);
         let survive = w.lt(w.load(&x.u_rr), q);

@@ -117,6 +117,17 @@ fn has_delta_surfaces(scene: &Scene) -> bool {
     })
 }
 
+/// The highest survival probability of Russian roulette (see `Path::roulette`): 1 when
+/// `max_depth` bounds the path, 0.95 when its length is unlimited, so that every path ends.
+#[inline(always)]
+fn roulette_cap(unbounded: bool) -> f32 {
+    if unbounded {
+        0.95
+    } else {
+        1.0
+    }
+}
+
 /// The most lights a vertex samples all of (see [`every_light`]).
 const MAX_SHADOWS: usize = 8;
 
@@ -484,7 +495,7 @@ impl Path {
     #[inline(always)]
     fn roulette(&self, st: &mut PathState, sampler: &mut Sampler) -> bool {
         if st.depth >= self.rr_depth {
-            let cap = if self.max_depth.is_some() { 1.0 } else { 0.95 };
+            let cap = roulette_cap(self.max_depth.is_none());
             let q = (st.beta.max_component() * st.eta_scale).min(cap);
             if !(sampler.next_1d() < q) {
                 return false;
@@ -732,8 +743,6 @@ impl Path {
             let mut first = 0u32;
             for i in lanes(alive) {
                 first |= ((st[i].depth == 0) as u32) << i;
-            }
-            for i in lanes(alive) {
                 let s = slot[i];
                 let sampler = &mut samplers[samplers_of[s] as usize];
                 sampler.resume(cursors[s]);
