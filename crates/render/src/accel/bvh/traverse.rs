@@ -247,8 +247,10 @@ impl Bvh {
                             } else {
                                 (near, c)
                             };
+                            // (Not prefetched: an any-hit query often stops before it
+                            // comes back to them. Camera rays on the 1M-triangle bench:
+                            // 1.05x the rays per second; random rays: 0.95x.)
                             stack[sp] = (r(push), dist[push]);
-                            self.prefetch(r(push));
                             sp += 1;
                             near = keep;
                         }
