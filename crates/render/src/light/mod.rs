@@ -347,6 +347,21 @@ impl Light {
         self.pdf_escape_from(d, &ShadingPoint::at(Point3::ORIGIN))
     }
 
+    /// [`Light::escaped`] and [`Light::pdf_escape_from`] together (an environment map turns
+    /// the direction into its coordinates once for both).
+    #[inline]
+    pub fn escaped_with_pdf(
+        &self,
+        d: Vec3,
+        lambda: &Wavelengths,
+        sp: &ShadingPoint,
+    ) -> (SampledSpectrum, f32) {
+        match self {
+            Light::Environment(e) if !self.cosine_sampled(sp) => e.radiance_and_pdf(d, lambda),
+            _ => (self.escaped(d, lambda), self.pdf_escape_from(d, sp)),
+        }
+    }
+
     /// The solid-angle density with which [`Light::sample_from`] at `sp` samples the direction
     /// `d` of a light at infinity.
     pub fn pdf_escape_from(&self, d: Vec3, sp: &ShadingPoint) -> f32 {

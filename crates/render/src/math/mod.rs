@@ -1,5 +1,6 @@
 //! Geometry: vectors, points, normals, transformations, rays, boxes and frames (all f32).
 
+mod angles;
 mod bounds;
 mod frame;
 mod ray;
@@ -7,6 +8,7 @@ mod ray_batch;
 mod transform;
 mod vector;
 
+pub use angles::fast_atan2;
 pub use bounds::{Bounds3, GAMMA3};
 pub use frame::Frame;
 pub use ray::{offset_ray_origin, Ray, SHADOW_EPSILON};

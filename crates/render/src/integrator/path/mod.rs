@@ -191,7 +191,7 @@ impl Path {
                 st.l += st.beta * scene.background(&st.lambda);
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
-                    let le = light.escaped(d, &st.lambda);
+                    let (le, pdf) = light.escaped_with_pdf(d, &st.lambda, &st.prev);
                     if le.is_black() {
                         continue;
                     }
@@ -199,12 +199,7 @@ impl Path {
                         1.0
                     } else {
                         let pick = scene.light_selector.pmf(lights, &st.prev, i as usize);
-                        power_heuristic(
-                            1.0,
-                            st.prev_pdf,
-                            1.0,
-                            pick * light.pdf_escape_from(d, &st.prev),
-                        )
+                        power_heuristic(1.0, st.prev_pdf, 1.0, pick * pdf)
                     };
                     st.l += st.beta * le * w;
                 }
