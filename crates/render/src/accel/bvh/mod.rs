@@ -26,10 +26,12 @@
 //! or two SSE ones), hit children are visited nearest entry first with the others on the stack
 //! with their entry distance; entries beyond the current closest hit are dropped when popped.
 //! Shadow rays take the nearest hit child next and the others in any order, and stop at the
-//! first hit. Every child about to be visited or pushed is prefetched, all of it (the four
-//! cache lines of a node, every block of a leaf), so that its lines load at once rather than
-//! one after another as the box test, then the child references, reach them: this matters for
-//! incoherent rays, which miss the caches.
+//! first hit. Every child about to be visited, and every child a closest-hit query pushes, is
+//! prefetched, all of it (the four cache lines of a node, every block of a leaf), so that its
+//! lines load at once rather than one after another as the box test, then the child
+//! references, reach them: this matters for incoherent rays, which miss the caches. The
+//! children a shadow ray pushes are not: it often stops before it comes back to them (camera
+//! rays' any-hit queries 1.05× faster, random rays' 0.95×).
 //! A block of four triangles is tested at once by the same arithmetic as
 //! [`crate::shape::intersect_triangle`], lane by lane, so that `t` and the barycentrics are
 //! bit-identical to [`crate::shape::Mesh::intersect`]. The ray's `tmax` is one ULP above the
