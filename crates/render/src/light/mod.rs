@@ -347,18 +347,21 @@ impl Light {
         self.pdf_escape_from(d, &ShadingPoint::at(Point3::ORIGIN))
     }
 
-    /// [`Light::escaped`] and [`Light::pdf_escape_from`] together (an environment map turns
-    /// the direction into its coordinates once for both).
+    /// [`Light::escaped`], and [`Light::pdf_escape_from`] at `sp` when it is given (0
+    /// otherwise): an environment map turns the direction into its coordinates once for both.
     #[inline]
     pub fn escaped_with_pdf(
         &self,
         d: Vec3,
         lambda: &Wavelengths,
-        sp: &ShadingPoint,
+        sp: Option<&ShadingPoint>,
     ) -> (SampledSpectrum, f32) {
-        match self {
-            Light::Environment(e) if !self.cosine_sampled(sp) => e.radiance_and_pdf(d, lambda),
-            _ => (self.escaped(d, lambda), self.pdf_escape_from(d, sp)),
+        match (self, sp) {
+            (Light::Environment(e), Some(sp)) if !self.cosine_sampled(sp) => {
+                e.radiance_and_pdf(d, lambda)
+            }
+            (_, Some(sp)) => (self.escaped(d, lambda), self.pdf_escape_from(d, sp)),
+            (_, None) => (self.escaped(d, lambda), 0.0),
         }
     }
 

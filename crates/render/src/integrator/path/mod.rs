@@ -191,7 +191,9 @@ impl Path {
                 st.l += st.beta * scene.background(&st.lambda);
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
-                    let (le, pdf) = light.escaped_with_pdf(d, &st.lambda, &st.prev);
+                    // (The density only where MIS weighs the light against the BSDF.)
+                    let sp = (!st.prev_delta).then_some(&st.prev);
+                    let (le, pdf) = light.escaped_with_pdf(d, &st.lambda, sp);
                     if le.is_black() {
                         continue;
                     }
