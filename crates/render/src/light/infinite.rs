@@ -104,16 +104,18 @@ impl Environment {
     #[inline]
     pub fn radiance_and_pdf(&self, d: Vec3, lambda: &Wavelengths) -> (SampledSpectrum, f32) {
         let Some(dist) = &self.distribution else {
-            return (self.radiance(d, lambda), warp::uniform_sphere_pdf());
+            return (self.radiance(d, lambda), self.pdf(d));
         };
+        let (uv, pdf) = self.uv_and_pdf(dist, d);
+        (self.radiance.spectral(uv, lambda, RgbRole::Emission), pdf)
+    }
+
+    /// The lat-long coordinates of direction `d` and its density under `dist`, the map's
+    /// sampling distribution.
+    #[inline]
+    fn uv_and_pdf(&self, dist: &Distribution2D, d: Vec3) -> (Point2, f32) {
         let (uv, st) = self.uv_and_sin_theta(d);
-        let l = self.radiance.spectral(uv, lambda, RgbRole::Emission);
-        let pdf = if st <= 0.0 {
-            0.0
-        } else {
-            dist.pdf([uv.x, uv.y]) / (2.0 * PI * PI * st)
-        };
-        (l, pdf)
+        (uv, solid_angle_pdf(dist.pdf([uv.x, uv.y]), st))
     }
 
     /// A direction sampled in proportion to the map, its radiance and solid-angle density.
@@ -129,7 +131,7 @@ impl Environment {
                 if !(st > 0.0 && pdf_uv > 0.0) {
                     return None;
                 }
-                let pdf = pdf_uv / (2.0 * PI * PI * st);
+                let pdf = solid_angle_pdf(pdf_uv, st);
                 // The Jacobian of the world transform keeps solid angle for rotations. The
                 // radiance at the sampled coordinates themselves (their direction's, up to
                 // round-off, without its arctangent and arccosine).
@@ -151,15 +153,20 @@ impl Environment {
     /// The solid-angle density of [`Environment::sample`] for direction `d`.
     pub fn pdf(&self, d: Vec3) -> f32 {
         match &self.distribution {
-            Some(dist) => {
-                let (uv, st) = self.uv_and_sin_theta(d);
-                if st <= 0.0 {
-                    return 0.0;
-                }
-                dist.pdf([uv.x, uv.y]) / (2.0 * PI * PI * st)
-            }
+            Some(dist) => self.uv_and_pdf(dist, d).1,
             None => warp::uniform_sphere_pdf(),
         }
+    }
+}
+
+/// The solid-angle density of a direction at sin θ `st` whose lat-long coordinates have the
+/// density `pdf_uv` (the square's 2π × π over the sphere's sin θ; 0 at the poles).
+#[inline]
+fn solid_angle_pdf(pdf_uv: f32, st: f32) -> f32 {
+    if st > 0.0 {
+        pdf_uv / (2.0 * PI * PI * st)
+    } else {
+        0.0
     }
 }
 

@@ -360,8 +360,10 @@ impl Light {
             (Light::Environment(e), Some(sp)) if !self.cosine_sampled(sp) => {
                 e.radiance_and_pdf(d, lambda)
             }
-            (_, Some(sp)) => (self.escaped(d, lambda), self.pdf_escape_from(d, sp)),
-            (_, None) => (self.escaped(d, lambda), 0.0),
+            _ => (
+                self.escaped(d, lambda),
+                sp.map_or(0.0, |sp| self.pdf_escape_from(d, sp)),
+            ),
         }
     }
 
