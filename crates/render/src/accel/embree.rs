@@ -2,9 +2,11 @@
 //! benchmarks can trace the very same rays through Embree and through candela's own BVH.
 //!
 //! Embree holds the mesh triangles (one Embree geometry per mesh, default build quality and
-//! scene flags, `threads=` the size of the current rayon pool). The other bounded primitives
-//! (spheres, boxes, …) go through candela's own [`Bvh`] and routines, and the closer of the two
-//! hits is kept (ties to the smaller primitive id). Embree's triangle test is not candela's
+//! scene flags, `threads=` the size of the current rayon pool; the environment variable
+//! `CANDELA_EMBREE_QUALITY=high` builds at `RTC_BUILD_QUALITY_HIGH` instead, with spatial
+//! splits, the quality Mitsuba 3 asks for). The other bounded primitives (spheres, boxes, …) go
+//! through candela's own [`Bvh`] and routines, and the closer of the two hits is kept (ties to
+//! the smaller primitive id). Embree's triangle test is not candela's
 //! watertight one: hits agree with the other structures up to round-off, not bit for bit.
 //!
 //! Needs `libembree3` (Debian: `apt-get install libembree-dev`).
@@ -28,6 +30,7 @@ type RtcDevice = *mut c_void;
 type RtcScene = *mut c_void;
 type RtcGeometry = *mut c_void;
 
+const RTC_BUILD_QUALITY_HIGH: u32 = 2;
 const RTC_GEOMETRY_TYPE_TRIANGLE: u32 = 0;
 const RTC_BUFFER_TYPE_INDEX: u32 = 0;
 const RTC_BUFFER_TYPE_VERTEX: u32 = 1;
@@ -104,6 +107,7 @@ extern "C" {
     fn rtcRetainScene(scene: RtcScene);
     fn rtcReleaseScene(scene: RtcScene);
     fn rtcCommitScene(scene: RtcScene);
+    fn rtcSetSceneBuildQuality(scene: RtcScene, quality: u32);
     fn rtcAttachGeometry(scene: RtcScene, geometry: RtcGeometry) -> u32;
     fn rtcNewGeometry(device: RtcDevice, kind: u32) -> RtcGeometry;
     fn rtcSetNewGeometryBuffer(
@@ -195,6 +199,10 @@ impl Embree {
         assert!(!device.is_null(), "Embree could not create a device");
         // SAFETY: `device` is live.
         let scene = unsafe { rtcNewScene(device) };
+        if std::env::var("CANDELA_EMBREE_QUALITY").as_deref() == Ok("high") {
+            // SAFETY: `scene` is live.
+            unsafe { rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH) };
+        }
         let mut first_id = Vec::new();
         // Primitive ids: bounded objects, then each mesh's triangles in order.
         let mut id = (0..geometry.bounded_count())
