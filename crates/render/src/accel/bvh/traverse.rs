@@ -566,8 +566,10 @@ impl<I: Isa> RayBox<I> {
     ///
     /// The three slabs are reduced as a tree (two maxima, then one) rather than one after the
     /// other, and no product follows the minima: a single ray's traversal waits on this chain
-    /// from one node's load to the next (on a CPU whose vector max and product take four
-    /// cycles each, 12 of about 45 cycles per node).
+    /// from one node's load to the next. (On an Intel Xeon: camera rays on the 1M-triangle
+    /// bench 1.01×, first-bounce rays 1.03× the rays per second; a frame of the bench's meshes
+    /// 0.98× the time. Fifteen independent comparisons instead of the reductions, shorter
+    /// still, were 0.86× as fast: the loop is bound by its instruction count too.)
     #[inline(always)]
     pub(super) fn test(&self, n: &BvhNode, tmin: f32, tmax: f32) -> (u32, [f32; W]) {
         let isa = self.isa;
