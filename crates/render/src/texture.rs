@@ -15,7 +15,7 @@
 
 use crate::color::Rgb;
 use crate::image::Image;
-use crate::math::Point2;
+use crate::math::{floor_i64, Point2};
 use crate::spectrum::{upsample, RgbRole, SampledSpectrum, Spectrum, Wavelengths};
 use std::sync::Arc;
 
@@ -114,19 +114,6 @@ impl ImageTexture {
                 a * (1.0 - fy) + b * fy
             }
         }
-    }
-}
-
-/// `x.floor() as i64` without the library call `floor` is on x86-64 without SSE4.1 (the
-/// same integer: truncation, one down for negative non-integers; f32 values beyond 2²⁴ are
-/// integers already).
-#[inline(always)]
-fn floor_i64(x: f32) -> i64 {
-    let i = x as i64;
-    if (i as f32) > x {
-        i - 1
-    } else {
-        i
     }
 }
 
@@ -229,8 +216,8 @@ impl Texture {
                 steps,
                 offset,
             } => {
-                let iu = (uv.x * steps[0] + offset[0]).floor() as i64;
-                let iv = (uv.y * steps[1] + offset[1]).floor() as i64;
+                let iu = floor_i64(uv.x * steps[0] + offset[0]);
+                let iv = floor_i64(uv.y * steps[1] + offset[1]);
                 if iu.rem_euclid(2) == iv.rem_euclid(2) {
                     *c1
                 } else {
