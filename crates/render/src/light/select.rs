@@ -115,12 +115,13 @@ impl LightSelector {
     /// The selector for `lights` (with the emissions and geometry of their shapes).
     pub fn new(lights: &[Light], emissions: &[Emission], geometry: &Geometry) -> Self {
         // Emissive shapes alone are chosen uniformly: their importance does not pay for its
-        // cost everywhere. Measured again with the four-lane evaluation below (Intel Xeon,
-        // bench/extra): the specular box with two rectangle lights, 2 % less variance for 27 %
-        // more time; the box with three, 36 % less variance for 31 % more time. Evaluating the
-        // importances alone (and choosing uniformly still) costs 25 % of that frame; the rest
-        // is the shadow rays of vertices that no longer pick a light facing away. Choosing
-        // by power alone (no cost) gave 9 % less variance with three lights, none with two.
+        // cost. Measured again with the four-lane evaluation below (Intel Xeon, bench/extra,
+        // variance over 12 seeds): the specular box with two rectangle lights, 1 % less
+        // variance for 27 % more time; the box with three, 22 % less variance for 31 % more
+        // time. Evaluating the importances alone (and choosing uniformly still) costs 25 % of
+        // that frame; the rest is the shadow rays of vertices that no longer pick a light
+        // facing away. Choosing by power alone (free per vertex) gave 8 % less variance with
+        // three lights, none with two.
         let shapes_only = lights.iter().all(|l| matches!(l, Light::Area(_)));
         if lights.len() <= 1 || lights.len() > MAX_IMPORTANCE_LIGHTS || shapes_only {
             return Self::default();
