@@ -300,6 +300,7 @@ impl<'a> Runs<'a> {
                 } else {
                     Wavelengths::Rgb
                 };
+                sampler.mark_path_start();
                 self.cursors[j] = sampler.cursor();
                 self.samplers_of[j] = run as u8;
                 self.pixels[j] = k as u16;
