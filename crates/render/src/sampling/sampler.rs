@@ -584,7 +584,13 @@ impl crate::simd::Kernel for CmjBatch<'_> {
         let (n, p) = (self.spp, self.pattern);
         if let Some(m) = square_power_of_two_root(n) {
             for (k, o) in self.out.iter_mut().enumerate() {
-                *o = cmj_square(self.first.wrapping_add(k as u32) % n, n, m, p);
+                *o = cmj_grid(
+                    self.first.wrapping_add(k as u32) % n,
+                    n,
+                    (m, m),
+                    p,
+                    permute_pow2,
+                );
             }
         } else {
             for (k, o) in self.out.iter_mut().enumerate() {
@@ -654,29 +660,43 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
     w |= w >> 8;
     w |= w >> 16;
     loop {
-        i ^= p;
-        i = i.wrapping_mul(0xe170893d);
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i = i.wrapping_mul(0x0929eb3f);
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | p >> 27);
-        i = i.wrapping_mul(0x6935fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dcb303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e501cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860a3df);
-        i &= w;
-        i ^= i >> 5;
+        i = permute_round(i, w, p);
         if i < l {
             break;
         }
     }
     (i.wrapping_add(p)) % l
+}
+
+/// [`permute`] for `l` a power of two: its first round always lands in `[0, l)` then (the
+/// round ends masked to l − 1, and `i ^ i >> 5` keeps the highest bit), so one round without
+/// the loop gives the same element.
+#[inline(always)]
+fn permute_pow2(i: u32, l: u32, p: u32) -> u32 {
+    permute_round(i, l - 1, p).wrapping_add(p) & (l - 1)
+}
+
+/// One round of [`permute`]'s cycle walk, within the mask `w` (all ones below l's top bit).
+#[inline(always)]
+fn permute_round(mut i: u32, w: u32, p: u32) -> u32 {
+    i ^= p;
+    i = i.wrapping_mul(0xe170893d);
+    i ^= p >> 16;
+    i ^= (i & w) >> 4;
+    i ^= p >> 8;
+    i = i.wrapping_mul(0x0929eb3f);
+    i ^= p >> 23;
+    i ^= (i & w) >> 1;
+    i = i.wrapping_mul(1 | p >> 27);
+    i = i.wrapping_mul(0x6935fa69);
+    i ^= (i & w) >> 11;
+    i = i.wrapping_mul(0x74dcb303);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0x9e501cc3);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0xc860a3df);
+    i &= w;
+    i ^ i >> 5
 }
 
 /// Kensler's hash to a float in `[0, 1)`.
@@ -698,13 +718,25 @@ fn randfloat(mut i: u32, p: u32) -> f32 {
 /// Multi-Jittered Sampling", with the aspect-ratio-1 grid of m × ⌈n/m⌉ cells).
 pub fn cmj(s: u32, n: u32, p: u32) -> [f32; 2] {
     if let Some(m) = square_power_of_two_root(n) {
-        return cmj_square(s, n, m, p);
+        return cmj_grid(s, n, (m, m), p, permute_pow2);
     }
     let m = ((n as f32).sqrt() as u32).max(1);
-    let nn = n.div_ceil(m);
-    let s = permute(s % n, n, p.wrapping_mul(0x51633e2d));
-    let sx = permute(s % m, m, p.wrapping_mul(0x68bc21eb));
-    let sy = permute(s / m, nn, p.wrapping_mul(0x02e5be93));
+    cmj_grid(s, n, (m, n.div_ceil(m)), p, permute)
+}
+
+/// [`cmj`] on the grid of `m` × `nn` cells, with `perm` for [`permute`] (or [`permute_pow2`],
+/// the same elements without a loop when the counts are powers of two).
+#[inline(always)]
+fn cmj_grid(
+    s: u32,
+    n: u32,
+    (m, nn): (u32, u32),
+    p: u32,
+    perm: impl Fn(u32, u32, u32) -> u32,
+) -> [f32; 2] {
+    let s = perm(s % n, n, p.wrapping_mul(0x51633e2d));
+    let sx = perm(s % m, m, p.wrapping_mul(0x68bc21eb));
+    let sy = perm(s / m, nn, p.wrapping_mul(0x02e5be93));
     let jx = randfloat(s, p.wrapping_mul(0x967a889b));
     let jy = randfloat(s, p.wrapping_mul(0x368cc8b7));
     let x = (sx as f32 + (sy as f32 + jx) / nn as f32) / m as f32;
@@ -717,46 +749,6 @@ pub fn cmj(s: u32, n: u32, p: u32) -> [f32; 2] {
 fn square_power_of_two_root(n: u32) -> Option<u32> {
     (n.is_power_of_two() && n.trailing_zeros().is_multiple_of(2))
         .then(|| 1 << (n.trailing_zeros() / 2))
-}
-
-/// [`cmj`] for `n` = `m`² with `m` a power of two: the same numbers, with [`permute_pow2`].
-#[inline(always)]
-fn cmj_square(s: u32, n: u32, m: u32, p: u32) -> [f32; 2] {
-    let s = permute_pow2(s % n, n, p.wrapping_mul(0x51633e2d));
-    let sx = permute_pow2(s % m, m, p.wrapping_mul(0x68bc21eb));
-    let sy = permute_pow2(s / m, m, p.wrapping_mul(0x02e5be93));
-    let jx = randfloat(s, p.wrapping_mul(0x967a889b));
-    let jy = randfloat(s, p.wrapping_mul(0x368cc8b7));
-    let x = (sx as f32 + (sy as f32 + jx) / m as f32) / m as f32;
-    let y = (s as f32 + jy) / n as f32;
-    [x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON)]
-}
-
-/// [`permute`] for `l` a power of two: its first round always lands in `[0, l)` then (the
-/// round ends masked to l − 1, and `i ^ i >> 5` keeps the highest bit), so one round without
-/// the loop gives the same element.
-#[inline(always)]
-fn permute_pow2(mut i: u32, l: u32, p: u32) -> u32 {
-    let w = l - 1;
-    i ^= p;
-    i = i.wrapping_mul(0xe170893d);
-    i ^= p >> 16;
-    i ^= (i & w) >> 4;
-    i ^= p >> 8;
-    i = i.wrapping_mul(0x0929eb3f);
-    i ^= p >> 23;
-    i ^= (i & w) >> 1;
-    i = i.wrapping_mul(1 | p >> 27);
-    i = i.wrapping_mul(0x6935fa69);
-    i ^= (i & w) >> 11;
-    i = i.wrapping_mul(0x74dcb303);
-    i ^= (i & w) >> 2;
-    i = i.wrapping_mul(0x9e501cc3);
-    i ^= (i & w) >> 2;
-    i = i.wrapping_mul(0xc860a3df);
-    i &= w;
-    i ^= i >> 5;
-    i.wrapping_add(p) & w
 }
 
 /// The largest f32 below 1.
@@ -928,17 +920,10 @@ mod tests {
     /// for every power-of-four count (and `permute_pow2` is `permute` for powers of two).
     #[test]
     fn square_cmj_is_the_general_cmj() {
+        // The general grid and permutation, with the cycle walk.
         let general = |s: u32, n: u32, p: u32| {
             let m = ((n as f32).sqrt() as u32).max(1);
-            let nn = n.div_ceil(m);
-            let s = permute(s % n, n, p.wrapping_mul(0x51633e2d));
-            let sx = permute(s % m, m, p.wrapping_mul(0x68bc21eb));
-            let sy = permute(s / m, nn, p.wrapping_mul(0x02e5be93));
-            let jx = randfloat(s, p.wrapping_mul(0x967a889b));
-            let jy = randfloat(s, p.wrapping_mul(0x368cc8b7));
-            let x = (sx as f32 + (sy as f32 + jx) / nn as f32) / m as f32;
-            let y = (s as f32 + jy) / n as f32;
-            [x.min(ONE_MINUS_EPSILON), y.min(ONE_MINUS_EPSILON)]
+            cmj_grid(s, n, (m, n.div_ceil(m)), p, permute)
         };
         let mut rng = Pcg32::new(3, 9);
         for n in [1u32, 4, 16, 64, 256, 1024] {
