@@ -123,14 +123,14 @@ impl LightSelector {
     /// The selector for `lights` (with the emissions and geometry of their shapes).
     pub fn new(lights: &[Light], emissions: &[Emission], geometry: &Geometry) -> Self {
         // Emissive shapes alone are chosen by power, not by importance: their importance does
-        // not pay for its cost. Measured again with the four-lane evaluation below (Intel Xeon, bench/extra,
-        // variance over 12 seeds): the specular box with two rectangle lights, 1 % less
-        // variance for 27 % more time; the box with three, 22 % less variance for 31 % more
-        // time. Evaluating the importances alone (and choosing uniformly still) costs 25 % of
-        // that frame; the rest is the shadow rays of vertices that no longer pick a light
-        // facing away. Choosing by power (free per vertex) gives 8.6 % less variance with
-        // three lights (RMSE 0.02991 -> 0.02859 at 256², 64 spp, 12 seeds) and the same with
-        // two (0.06885 -> 0.06894), for the same time.
+        // not pay for its cost. Measured again with the four-lane evaluation below (Intel
+        // Xeon, bench/extra, variance over 12 seeds): the specular box with two rectangle
+        // lights, 1 % less variance for 27 % more time; the box with three, 22 % less
+        // variance for 31 % more time. Evaluating the importances alone (and choosing
+        // uniformly still) costs 25 % of that frame; the rest is the shadow rays of vertices
+        // that no longer pick a light facing away. Choosing by power (free per vertex) gives
+        // 8.6 % less variance with three lights (RMSE 0.02991 -> 0.02859 at 256², 64 spp, 12
+        // seeds) and the same with two (0.06885 -> 0.06894), for the same time.
         let shapes_only = lights.iter().all(|l| matches!(l, Light::Area(_)));
         if shapes_only && lights.len() > 1 {
             return Self::by_power(lights, emissions);
@@ -275,7 +275,7 @@ impl LightSelector {
         if i >= self.power.len() {
             i = self.power.iter().rposition(|&p| p > 0.0).unwrap_or(0);
         }
-        let start = self.power_cdf[i] - self.power[i];
+        let start = if i == 0 { 0.0 } else { self.power_cdf[i - 1] };
         let v = ((x - start) / self.power[i]).clamp(0.0, ONE_MINUS_EPSILON);
         (i, self.power[i] / total, v)
     }
