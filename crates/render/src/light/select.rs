@@ -263,11 +263,17 @@ impl LightSelector {
         !self.power.is_empty()
     }
 
+    /// The total power of the lights chosen by power.
+    #[inline(always)]
+    fn power_total(&self) -> f32 {
+        self.power_cdf[self.power_cdf.len() - 1]
+    }
+
     /// Picks a light in proportion to its power with `u`: its index, probability and `u`
     /// rescaled within its share.
     #[inline(always)]
     fn pick_by_power(&self, u: f32) -> (usize, f32, f32) {
-        let total = self.power_cdf[self.power_cdf.len() - 1];
+        let total = self.power_total();
         let x = u * total;
         // The first running sum above x (a light of power 0 has no share), within range
         // when round-off puts x at the total.
@@ -374,8 +380,7 @@ impl LightSelector {
     pub fn pmf(&self, lights: &[Light], sp: &ShadingPoint, i: usize) -> f32 {
         let n = lights.len();
         if !self.power.is_empty() {
-            let total = self.power_cdf[self.power_cdf.len() - 1];
-            return self.power.get(i).map_or(0.0, |&p| p / total);
+            return self.power.get(i).map_or(0.0, |&p| p / self.power_total());
         }
         if self.bounds.len() != n {
             return if n == 0 { 0.0 } else { 1.0 / n as f32 };

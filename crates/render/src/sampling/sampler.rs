@@ -10,10 +10,11 @@
 //! stratified in every pair of dimensions a path consumes (pixel position, light sample, BSDF
 //! sample, …), which lowers the error at equal sample count ([`SamplerKind::Sobol`], the
 //! default). One pair is drawn otherwise: the first vertex's direction, from a correlated
-//! multi-jittered pattern (see [`Sampler::mark_path_start`]). [`SamplerKind::Stratified`] is the classic jittered sampler: every pair of
-//! dimensions is a correlated multi-jittered pattern (Kensler 2013; a jittered grid whose
-//! projections are also stratified) and every single dimension is cut into `spp` strata, each
-//! dimension with its own shuffle of the strata. [`SamplerKind::Independent`] draws every number
+//! multi-jittered pattern (see [`Sampler::mark_path_start`]). [`SamplerKind::Stratified`] is
+//! the classic jittered sampler: every pair of dimensions is a correlated multi-jittered
+//! pattern (Kensler 2013; a jittered grid whose projections are also stratified) and every
+//! single dimension is cut into `spp` strata, each dimension with its own shuffle of the
+//! strata. [`SamplerKind::Independent`] draws every number
 //! from the pixel's PCG32 stream. Free-standing samplers (tests, preprocessing) are plain PCG32
 //! streams.
 
@@ -203,6 +204,16 @@ impl Sampler {
         if let Mode::Sobol(_) = self.mode {
             self.direction_dim = self.dim + 3;
         }
+    }
+
+    /// The current sample's point of the multi-jittered direction pair
+    /// ([`Sampler::mark_path_start`]) of a Sobol sampler with seed `seed`.
+    fn direction_pair(&self, seed: u32) -> [f32; 2] {
+        cmj(
+            self.index % self.spp,
+            self.spp,
+            cmj_pattern(seed, self.direction_dim),
+        )
     }
 
     /// A free-standing independent sampler (tests, preprocessing) seeded by `seed` on stream
@@ -403,11 +414,7 @@ impl Sampler {
                 }
                 if self.dim == self.direction_dim {
                     self.dim += 1;
-                    return cmj(
-                        self.index % self.spp,
-                        self.spp,
-                        cmj_pattern(seed, self.dim - 1),
-                    )[0];
+                    return self.direction_pair(seed)[0];
                 }
                 let s = self.dim_seeds(seed, self.dim);
                 self.dim += 1;
@@ -449,11 +456,7 @@ impl Sampler {
                 }
                 if self.dim == self.direction_dim {
                     self.dim += 2;
-                    return cmj(
-                        self.index % self.spp,
-                        self.spp,
-                        cmj_pattern(seed, self.dim - 2),
-                    );
+                    return self.direction_pair(seed);
                 }
                 let s = self.dim_seeds(seed, self.dim);
                 self.dim += 2;
