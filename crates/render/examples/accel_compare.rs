@@ -6,7 +6,8 @@
 //!
 //! `cargo run --release -p candela-render [--features embree] --example accel_compare --
 //! [mesh|bounce|spheres|cornell|all] [--subdiv N] [--spheres N] [--rays N] [--repeat R]
-//! [--accel bvh,embree,...] [--threads 1|all|both] [--set camera|random|both]`
+//! [--accel bvh,embree,...] [--threads 1|all|both] [--set camera|random|both]
+//! [--bounce-set first|random|missing|all]`
 //!
 //! `bounce` (also part of `mesh`): a path tracer's first-bounce rays on the bumpy sphere, sixteen
 //! from each camera ray's hit in cosine-distributed directions (a pixel's samples), one thread,
@@ -14,6 +15,10 @@
 //! ray through Embree and sixteen at a time through its hybrid packet traversal
 //! (`rtcIntersect16`, as Mitsuba traces them); random rays and rays that miss the mesh's box
 //! (the cost of a call) as controls.
+//!
+//! `--bounce-set` runs one of `bounce`'s sets alone: with `--repeat 1` under Valgrind's callgrind,
+//! the calls' inclusive counts give each structure's instructions per ray on that set (the
+//! machine has no hardware counters; see `bench/README.md`).
 //!
 //! Rays/s are the best of R passes; the structures take turns within each pass so that a
 //! busy machine slows all of them alike.
@@ -241,7 +246,8 @@ fn main() {
         bench(&b, &kinds, repeat, &threads, &only);
     }
     if which == "all" || which == "mesh" || which == "bounce" {
-        bounce(num("--subdiv", 289) as u32, rays, repeat);
+        let only = opt("--bounce-set").unwrap_or_else(|| "all".into());
+        bounce(num("--subdiv", 289) as u32, rays, repeat, &only);
     }
     if which == "all" || which == "spheres" {
         bench(
@@ -265,7 +271,27 @@ fn main() {
 
 /// The `bounce` comparison (see the module's documentation): first-bounce rays, and as
 /// controls random rays from inside the mesh and rays that miss its box (the cost of a call).
-fn bounce(subdiv: u32, n: usize, repeat: usize) {
+/// The rays of `rs` one by one through `accel`; returns how many hit. (A function of its own,
+/// never inlined, so that a profile counts exactly one pass's calls: see `--bounce-set`.)
+#[inline(never)]
+fn single_pass(accel: &Accel, g: &Geometry, rs: &[Ray]) -> usize {
+    let mut st = RayStats::default();
+    rs.iter()
+        .filter(|r| accel.intersect(g, r, &mut st).is_some())
+        .count()
+}
+
+/// [`single_pass`] through Embree.
+#[cfg(feature = "embree")]
+#[inline(never)]
+fn single_pass_embree(e: &candela_render::accel::Embree, g: &Geometry, rs: &[Ray]) -> usize {
+    let mut st = RayStats::default();
+    rs.iter()
+        .filter(|r| e.intersect(g, r, &mut st).is_some())
+        .count()
+}
+
+fn bounce(subdiv: u32, n: usize, repeat: usize, only: &str) {
     let b = scenes::mesh_bench(subdiv, n / 16);
     let g = &b.geometry;
     let bvh = Accel::build(AccelKind::Bvh, g);
@@ -324,12 +350,10 @@ fn bounce(subdiv: u32, n: usize, repeat: usize) {
         ("missing (per call)", &away),
     ];
     for (name, set) in sets {
-        let (single, hits) = rate(set, &|rs| {
-            let mut st = RayStats::default();
-            rs.iter()
-                .filter(|r| bvh.intersect(g, r, &mut st).is_some())
-                .count()
-        });
+        if only != "all" && !name.starts_with(only) {
+            continue;
+        }
+        let (single, hits) = rate(set, &|rs| single_pass(&bvh, g, rs));
         // Sixteen at a time through the batch entry (packets for any six sharing an octant).
         let (batch, _) = rate(set, &|rs| {
             let mut st = RayStats::default();
@@ -349,12 +373,7 @@ fn bounce(subdiv: u32, n: usize, repeat: usize) {
         #[cfg(feature = "embree")]
         {
             let e = candela_render::accel::Embree::build(g);
-            let (e1, _) = rate(set, &|rs| {
-                let mut st = RayStats::default();
-                rs.iter()
-                    .filter(|r| e.intersect(g, r, &mut st).is_some())
-                    .count()
-            });
+            let (e1, _) = rate(set, &|rs| single_pass_embree(&e, g, rs));
             let (e16, _) = rate(set, &|rs| e.intersect16(rs).iter().flatten().count());
             print!(
                 "  Embree {e1:7.2}, 16 at a time {e16:7.2}  Bvh {:.2}x, {:.2}x",

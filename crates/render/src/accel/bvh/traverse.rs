@@ -25,7 +25,6 @@ impl Bvh {
             geometry,
             ray: *ray,
             tri: TriRay::new(ray, !self.tris.is_empty()),
-            block: BlockRay::new(ray),
             best: None,
             tests: 0,
         };
@@ -41,7 +40,6 @@ impl Bvh {
             geometry,
             ray: *ray,
             tri: TriRay::new(ray, !self.tris.is_empty()),
-            block: BlockRay::new(ray),
             tests: 0,
         };
         let visited = self.traverse(ray, &mut q);
@@ -94,7 +92,6 @@ impl Bvh {
             geometry,
             ray: *ray,
             tri: TriRay::new(ray, self.leaf_needs_sheared_ray(r)),
-            block: BlockRay::new(ray),
             best: None,
             tests: 0,
         };
@@ -115,7 +112,6 @@ impl Bvh {
             geometry,
             ray: *ray,
             tri: TriRay::new(ray, self.leaf_needs_sheared_ray(r)),
-            block: BlockRay::new(ray),
             tests: 0,
         };
         let hit = q.leaf(self, r);
@@ -300,8 +296,11 @@ impl Bvh {
                     cur = stack[sp].0;
                     continue;
                 }
-            } else if q.leaf(self, cur) {
-                return visited | FOUND;
+            } else {
+                leaves_are_rarer();
+                if q.leaf(self, cur) {
+                    return visited | FOUND;
+                }
             }
             // Pop the next entry still in reach.
             loop {
@@ -336,6 +335,18 @@ impl<Q: Query> crate::simd::Kernel for Traversal<'_, Q> {
     }
 }
 
+/// Marks the path that calls it as rarely taken (a call to a cold function): leaves, which a
+/// ray reaches about a quarter as often as inner nodes, so that the register allocator keeps
+/// the box test's reciprocals and origin in registers through the node loop and spills around
+/// the leaf tests instead (it had kept them all on the stack). On the 1M-triangle bench, one
+/// thread, against the same build without it (medians of pairs): camera rays 1.02× the rays
+/// per second for closest hits, 0.99× for any hit; random rays 1.04× and 1.03×; first-bounce
+/// rays 1.01×. (Keeping `tmin` or the far end in registers as well undid it: 0.90× on
+/// first-bounce rays, 0.88× on any-hit camera rays.)
+#[cold]
+#[inline(never)]
+fn leaves_are_rarer() {}
+
 /// Set in the visit count returned by [`Bvh::traverse`] when the query stopped it.
 const FOUND: u64 = 1 << 63;
 
@@ -360,7 +371,6 @@ struct ClosestQuery<'a> {
     /// The ray, its `tmax` one ULP above the best hit.
     ray: Ray,
     tri: TriRay,
-    block: BlockRay,
     best: Option<Hit>,
     tests: u64,
 }
@@ -410,8 +420,11 @@ impl Query for ClosestQuery<'_> {
                 }
             }
         } else {
+            // (The ray broadcast here, not once per ray: as cheap as loading it back, and the
+            // rays that meet no such leaf, as in meshes, do not pay for it.)
+            let block = BlockRay::new(&self.ray);
             for k in 0..n.div_ceil(4) as usize {
-                let (h, ids) = bvh.block_test(r.meta, first + k, &self.block, &self.ray);
+                let (h, ids) = bvh.block_test(r.meta, first + k, &block, &self.ray);
                 let mut mask = h.mask & lanes(n, k);
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
@@ -461,7 +474,6 @@ struct AnyQuery<'a> {
     /// bench: 0.94× the time with the copy).
     ray: Ray,
     tri: TriRay,
-    block: BlockRay,
     tests: u64,
 }
 
@@ -489,8 +501,9 @@ impl Query for AnyQuery<'_> {
             }
             self.tests += n as u64;
         } else if r.meta & !COUNT_MASK != OBJ_LEAF {
+            let block = BlockRay::new(&self.ray);
             for k in 0..n.div_ceil(4) as usize {
-                let (h, _) = bvh.block_test(r.meta, first + k, &self.block, &self.ray);
+                let (h, _) = bvh.block_test(r.meta, first + k, &block, &self.ray);
                 if h.mask & lanes(n, k) != 0 {
                     self.tests += (n as u64).min(4 * k as u64 + 4);
                     return true;
