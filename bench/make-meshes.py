@@ -8,6 +8,9 @@ triangle lists, smooth (area-weighted) vertex normals.
 - blob.ply:  a lumpy UV sphere, 96 rings × 256 segments (48 640 triangles).
 Total: 212 480 triangles.
 
+And sky.pfm, the environment map of bench/extra/meshes-envmap.xml: a 256 × 128 lat-long sky
+(a bluish gradient over a dark ground) with a small sun (about 2.3° across, radiance ~3000).
+
 Usage: python3 bench/make-meshes.py [OUT_DIR]   (default: bench/meshes beside this script)
 """
 import math, os, struct, sys
@@ -118,6 +121,30 @@ def make_blob(nth=96, nph=256):
         faces.append((last, ring(nth - 1, j), ring(nth - 1, j + 1)))
     return verts, faces
 
+def write_sky(path, w=256, h=128):
+    """A lat-long map (row 0 at the top: +y, Mitsuba's convention) as a little-endian PFM."""
+    sun = normalize((math.cos(0.6) * math.cos(1.0), math.sin(0.6), math.cos(0.6) * math.sin(1.0)))
+    rows = []
+    for j in range(h):
+        theta = math.pi * (j + 0.5) / h
+        row = []
+        for i in range(w):
+            phi = 2.0 * math.pi * (i + 0.5) / w
+            d = (math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi))
+            if d[1] > 0.0:
+                c = (0.25 + 0.3 * (1.0 - d[1]), 0.35 + 0.3 * (1.0 - d[1]), 0.6 + 0.2 * (1.0 - d[1]))
+            else:
+                c = (0.12, 0.1, 0.08)
+            if d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2] > math.cos(0.04):
+                c = (3000.0, 2800.0, 2400.0)
+            row.append(c)
+        rows.append(row)
+    with open(path, "wb") as f:
+        f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+        for row in reversed(rows):  # PFM rows go bottom to top
+            for c in row:
+                f.write(struct.pack("<3f", *c))
+
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(os.path.abspath(__file__)), "meshes")
     os.makedirs(out, exist_ok=True)
@@ -125,7 +152,8 @@ def main():
     for name, make in (("bumpy", make_bumpy), ("knot", make_knot), ("blob", make_blob)):
         v, f = make()
         total += write_ply(os.path.join(out, name + ".ply"), v, f)
-    print(f"{out}: {total} triangles")
+    write_sky(os.path.join(out, "sky.pfm"))
+    print(f"{out}: {total} triangles, sky.pfm")
 
 if __name__ == "__main__":
     main()

@@ -7,7 +7,7 @@
 # Usage: bash scripts/compare-variants.sh [SCENE.xml ...] [-- SEED-VARIANCE.PY OPTIONS]
 #   e.g. bash scripts/compare-variants.sh bench/extra/cornell-3lights.xml -- --seeds 8
 # CANDELA_BIN=path skips the build and uses that binary. Needs the bench virtual environment
-# (made by scripts/compare-mitsuba.sh) and the meshes (bench/make-meshes.py).
+# (made by scripts/compare-mitsuba.sh) and the meshes and sky (bench/make-meshes.py).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 venv=${CANDELA_BENCH_VENV:-$HOME/.cache/candela-bench/venv}
@@ -22,7 +22,7 @@ if [ -z "${CANDELA_BIN:-}" ]; then
   CANDELA_BIN=$root/target/release/candela
 fi
 [ -x "$venv/bin/python" ] || { echo "no bench environment at $venv: run scripts/compare-mitsuba.sh once" >&2; exit 1; }
-[ -f "$root/bench/meshes/knot.ply" ] || python3 "$root/bench/make-meshes.py"
+[ -f "$root/bench/meshes/sky.pfm" ] || python3 "$root/bench/make-meshes.py"
 export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
 echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(nproc) cores;" \
   "AVX-512: $(grep -qw avx512f /proc/cpuinfo && echo yes || echo no)"

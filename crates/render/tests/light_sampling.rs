@@ -1,6 +1,8 @@
 //! Statistical correctness of light sampling: χ² goodness of fit of the directions that
 //! `Light::sample` returns against `Light::pdf_hit` (area lights) and `Light::pdf_escape`
-//! (lights at infinity), and Monte Carlo irradiance by light sampling against closed forms.
+//! (lights at infinity), and of an environment map's compensated samples (`Light::sample_from`)
+//! against `Light::pdf_escape_from`; Monte Carlo irradiance by light sampling, and by light and
+//! BSDF sampling weighed by MIS, against closed forms.
 //!
 //! Scenes hold one emitter and use the linear-list accelerator, so that these tests depend on
 //! the lights alone.
@@ -16,7 +18,9 @@ use candela_render::accel::AccelKind;
 use candela_render::image::Image;
 use candela_render::interaction::SurfaceProps;
 use candela_render::light::Emission;
-use candela_render::light::{Components, Environment, HemisphereLight, Light, Target};
+use candela_render::light::{
+    Components, Environment, HemisphereLight, Light, ShadingPoint, Target,
+};
 use candela_render::material::Material;
 use candela_render::math::{Point2, Point3, Ray, Transform, Vec3, PI};
 use candela_render::sampling::Pcg32;
@@ -331,8 +335,9 @@ fn infinite_cases() -> Vec<(&'static str, Light)> {
 }
 
 fn tests_count() -> usize {
-    // The area lights, the ellipsoid seen from outside, the lights at infinity.
-    area_cases().len() + 1 + infinite_cases().len()
+    // The area lights, the ellipsoid seen from outside, the lights at infinity, the
+    // compensated environment map.
+    area_cases().len() + 1 + infinite_cases().len() + 1
 }
 
 fn seed(name: &str) -> u64 {
@@ -487,6 +492,52 @@ fn chi2_infinite_lights() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+// The path tracer's samples of an environment map (MIS weighs them against BSDF sampling)
+// follow its compensated distribution: the directions follow pdf_escape_from, which integrates
+// to 1; the directions of the map's dim gradient, no brighter than its mean, are never sampled
+// (density 0 there, where the full distribution is positive), and the bright spot takes them all.
+#[test]
+fn chi2_environment_map_compensated() {
+    let level = sidak(ALPHA, tests_count());
+    let s = SceneBuilder::new().build(AccelKind::None);
+    let light = Light::Environment(Environment::new(env_image(), env_transform()));
+    let sp = ShadingPoint {
+        p: Point3::ORIGIN,
+        n: Vec3::Z,
+        reflect_only: false,
+    };
+    let name = "environment map, compensated";
+    let t = Chi2 {
+        name,
+        grid: Grid::new(Vec3::Z, 1.0, ROWS),
+        samples: SAMPLES,
+        seed: seed(name),
+        expected_mass: Some(1.0),
+        level,
+    };
+    match t.run(
+        |u| {
+            light
+                .sample_from(
+                    &s.geometry,
+                    &s.emissions,
+                    &sp,
+                    [u[0], u[1]],
+                    &Wavelengths::Rgb,
+                )
+                .map(|ls| (ls.wi, ls.pdf))
+        },
+        |d| light.pdf_escape_from(d, &sp),
+    ) {
+        Ok(r) => println!("{name}: p-value {:.3e}", r.p_value),
+        Err(e) => panic!("{e}"),
+    }
+    // A direction of the gradient (the map's left edge, near its equator).
+    let dim = env_transform().vector(Vec3::new(0.999, 0.04, 0.0).normalize());
+    assert!(light.pdf_escape(dim) > 0.0);
+    assert_eq!(light.pdf_escape_from(dim, &sp), 0.0);
+}
+
 /// The Monte Carlo irradiance E = ∫ L cos⁺θ dω at `p` (normal `n`) by sampling `light`, with
 /// its standard error.
 fn irradiance(
@@ -504,6 +555,47 @@ fn irradiance(
             Some((wi, pdf, li)) => (li.average() * n.dot(wi).max(0.0) / pdf) as f64,
             None => 0.0,
         };
+        sum += v;
+        sum2 += v * v;
+    }
+    mean_and_error(sum, sum2, samples)
+}
+
+/// The irradiance E at the origin (normal `n`) from the light at infinity `light` as the path
+/// tracer estimates it at a diffuse surface: one light sample (`Light::sample_from`: an
+/// environment map's compensated distribution) and one cosine-weighted sample per estimate,
+/// each weighed by the power heuristic against the other technique's density; with its
+/// standard error.
+fn mis_irradiance(s: &Scene, light: &Light, n: Vec3, samples: usize, seed: u64) -> (f64, f64) {
+    use candela_render::sampling::warp;
+    let sp = ShadingPoint {
+        p: Point3::ORIGIN,
+        n,
+        reflect_only: true,
+    };
+    let frame = candela_render::math::Frame::from_normal(n.to_normal());
+    let heuristic = |a: f32, b: f32| (a * a / (a * a + b * b)) as f64;
+    let mut rng = Pcg32::new(seed, 78);
+    let (mut sum, mut sum2) = (0f64, 0f64);
+    for _ in 0..samples {
+        let mut v = 0.0;
+        let u = [rng.next_f32(), rng.next_f32()];
+        if let Some(ls) = light.sample_from(&s.geometry, &s.emissions, &sp, u, &Wavelengths::Rgb) {
+            let cos = n.dot(ls.wi).max(0.0);
+            let pdf_bsdf = warp::cosine_hemisphere_pdf(cos);
+            v += (ls.li.to_rgb().average() * cos / ls.pdf) as f64 * heuristic(ls.pdf, pdf_bsdf);
+        }
+        let wi = frame.to_world(warp::square_to_cosine_hemisphere([
+            rng.next_f32(),
+            rng.next_f32(),
+        ]));
+        let cos = n.dot(wi);
+        let pdf_bsdf = warp::cosine_hemisphere_pdf(cos);
+        if pdf_bsdf > 0.0 {
+            let li = light.escaped(wi, &Wavelengths::Rgb).to_rgb().average();
+            let pdf_light = light.pdf_escape_from(wi, &sp);
+            v += (li * cos / pdf_bsdf) as f64 * heuristic(pdf_bsdf, pdf_light);
+        }
         sum += v;
         sum2 += v * v;
     }
@@ -825,6 +917,11 @@ fn irradiance_matches_closed_forms() {
     check(
         "environment map",
         irradiance(&empty, &envl, Point3::ORIGIN, nrm, n_samples, 13),
+        exact,
+    );
+    check(
+        "environment map, compensated light samples and cosine samples by MIS",
+        mis_irradiance(&empty, &envl, nrm, n_samples, 14),
         exact,
     );
 

@@ -8,6 +8,14 @@
 //! - `environment(pigment [, T])`: radiance from every direction; image pigments are lat-long
 //!   maps with u = atan2(y, x)/2π, v = acos(z)/π in the environment's frame (Mitsuba
 //!   `constant`, `envmap`). Image maps are importance-sampled by luminance × sin θ.
+//!
+//! Next-event estimation, which multiple importance sampling weighs against BSDF sampling,
+//! samples an image map by its *compensated* distribution (Karlík et al. 2019, "MIS
+//! compensation", as pbrt-v4 does): the luminance bound less its mean over the sphere, clamped at
+//! 0, times sin θ. Directions no brighter than the mean are left to BSDF sampling, which covers
+//! them (MIS then gives its samples their full weight), and the light samples go where the map
+//! outshines its average, a sun's disc above all. Sampling without MIS (`Light::sample`, the
+//! radiosity's direct light) keeps the full distribution, whose support is the whole map.
 
 use crate::color::Rgb;
 use crate::math::{Point2, Transform, Vec3, INV_2PI, INV_PI, PI};
@@ -17,6 +25,13 @@ use crate::spectrum::{RgbRole, SampledSpectrum, Wavelengths};
 use crate::texture::Texture;
 
 /// A light from every direction (an environment map, or a constant colour).
+///
+/// An image map samples directions in proportion to its luminance (a bound of it per texel)
+/// times sin θ, or, for next-event estimation that MIS weighs against BSDF sampling, by its
+/// *compensated* distribution: the luminance less its mean over the sphere, clamped at 0 (MIS
+/// compensation, Karlík et al. 2019, as in pbrt-v4), which leaves the directions no brighter
+/// than the mean to BSDF sampling and spends the light samples where the map outshines its
+/// average.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Environment {
     /// Radiance over the lat-long (u, v) square.
@@ -25,22 +40,55 @@ pub struct Environment {
     pub world_from_env: Transform,
     /// Importance-sampling distribution over (u, v) for image maps.
     distribution: Option<Distribution2D>,
+    /// The compensated distribution (see the module documentation), for samples weighed by
+    /// MIS against BSDF sampling; `None` when no cell is brighter than the mean (a uniform
+    /// map), where the full distribution serves.
+    compensated: Option<Distribution2D>,
 }
 
 impl Environment {
     /// An environment light; image maps get a sampling distribution.
     pub fn new(radiance: Texture, world_from_env: Transform) -> Self {
-        let distribution = match &radiance {
-            Texture::Image(t) if t.image.width() > 0 && t.image.height() > 0 => {
-                let (w, h) = (t.image.width(), t.image.height());
-                Some(Distribution2D::new(&cell_maxima(t), w, h))
+        let (mut distribution, mut compensated) = (None, None);
+        if let Texture::Image(t) = &radiance {
+            let (w, h) = (t.image.width(), t.image.height());
+            if w > 0 && h > 0 {
+                let bound = cell_maxima(t);
+                let sin = |i: usize| (PI * ((i / w) as f32 + 0.5) / h as f32).sin();
+                let full: Vec<f32> = bound.iter().enumerate().map(|(i, b)| b * sin(i)).collect();
+                // The mean over the sphere: each cell weighs by its solid angle (∝ sin θ).
+                let (mut sum, mut weight) = (0f64, 0f64);
+                for (i, b) in bound.iter().enumerate() {
+                    sum += *b as f64 * sin(i) as f64;
+                    weight += sin(i) as f64;
+                }
+                let mean = (sum / weight) as f32;
+                let excess: Vec<f32> = bound
+                    .iter()
+                    .enumerate()
+                    .map(|(i, b)| (b - mean).max(0.0) * sin(i))
+                    .collect();
+                if excess.iter().any(|&e| e > 0.0) {
+                    compensated = Some(Distribution2D::new(&excess, w, h));
+                }
+                distribution = Some(Distribution2D::new(&full, w, h));
             }
-            _ => None,
-        };
+        }
         Self {
             radiance,
             world_from_env,
             distribution,
+            compensated,
+        }
+    }
+
+    /// The distribution samples take: the compensated one where MIS weighs them against BSDF
+    /// sampling (`mis`) and the map has one, the full one otherwise (`None`: a constant map).
+    #[inline]
+    fn distribution(&self, mis: bool) -> Option<&Distribution2D> {
+        match (&self.compensated, mis) {
+            (Some(c), true) => Some(c),
+            _ => self.distribution.as_ref(),
         }
     }
 
@@ -102,9 +150,14 @@ impl Environment {
     /// [`Environment::radiance`] and [`Environment::pdf`] of direction `d`, its lat-long
     /// coordinates computed once for both.
     #[inline]
-    pub fn radiance_and_pdf(&self, d: Vec3, lambda: &Wavelengths) -> (SampledSpectrum, f32) {
-        let Some(dist) = &self.distribution else {
-            return (self.radiance(d, lambda), self.pdf(d));
+    pub fn radiance_and_pdf(
+        &self,
+        d: Vec3,
+        lambda: &Wavelengths,
+        mis: bool,
+    ) -> (SampledSpectrum, f32) {
+        let Some(dist) = self.distribution(mis) else {
+            return (self.radiance(d, lambda), self.pdf(d, mis));
         };
         let (uv, pdf) = self.uv_and_pdf(dist, d);
         (self.radiance.spectral(uv, lambda, RgbRole::Emission), pdf)
@@ -118,13 +171,16 @@ impl Environment {
         (uv, solid_angle_pdf(dist.pdf([uv.x, uv.y]), st))
     }
 
-    /// A direction sampled in proportion to the map, its radiance and solid-angle density.
+    /// A direction sampled in proportion to the map (to its compensated distribution with
+    /// `mis`: for samples that MIS weighs against BSDF sampling), its radiance and solid-angle
+    /// density.
     pub fn sample(
         &self,
         u: [f32; 2],
         lambda: &Wavelengths,
+        mis: bool,
     ) -> Option<(Vec3, SampledSpectrum, f32)> {
-        match &self.distribution {
+        match self.distribution(mis) {
             Some(dist) => {
                 let (uv, pdf_uv) = dist.sample(u);
                 let (d, st) = self.direction(uv);
@@ -150,9 +206,10 @@ impl Environment {
         }
     }
 
-    /// The solid-angle density of [`Environment::sample`] for direction `d`.
-    pub fn pdf(&self, d: Vec3) -> f32 {
-        match &self.distribution {
+    /// The solid-angle density of [`Environment::sample`] for direction `d` (with the same
+    /// `mis`).
+    pub fn pdf(&self, d: Vec3, mis: bool) -> f32 {
+        match self.distribution(mis) {
             Some(dist) => self.uv_and_pdf(dist, d).1,
             None => warp::uniform_sphere_pdf(),
         }
@@ -215,11 +272,11 @@ impl HemisphereLight {
     }
 }
 
-/// The sampling function of an environment map, one cell of the lat-long square per pixel:
-/// the largest luminance among the pixels its lookups in the cell read (with bilinear
+/// The luminance bound of an environment map's sampling, one cell of the lat-long square per
+/// pixel: the largest luminance among the pixels its lookups in the cell read (with bilinear
 /// filtering, the pixels around it too: half a pixel around a small sun is still bright; the
-/// cells are where the lookups land, with the texture's scale and offset), times sin θ at the
-/// cell's centre. An upper bound of the radiance over the cell, so that no direction of high
+/// cells are where the lookups land, with the texture's scale and offset); the distributions
+/// multiply it by sin θ at the cell's centre. An upper bound of the radiance over the cell, so that no direction of high
 /// radiance has a low density. (A cell's centre alone left a sun's rim, and with Mitsuba's
 /// half-texel offset part of the sun itself, to sky-level densities, whose rare samples were
 /// fireflies: the ratio of radiance to density reached 430 times its mean with a 3-pixel sun;
@@ -263,7 +320,6 @@ fn cell_maxima(t: &crate::texture::ImageTexture) -> Vec<f32> {
     }
     let mut f = Vec::with_capacity(w * h);
     for y in 0..h {
-        let sin = (PI * (y as f32 + 0.5) / h as f32).sin();
         let (ry, (y0, y1)) = axis(1, h, y);
         for x in 0..w {
             let (rx, (x0, x1)) = axis(0, w, x);
@@ -278,7 +334,7 @@ fn cell_maxima(t: &crate::texture::ImageTexture) -> Vec<f32> {
                     weighted += wy * weight(i, rx) * l;
                 }
             }
-            f.push(brightest.min(weighted) * sin);
+            f.push(brightest.min(weighted));
         }
     }
     f
@@ -318,7 +374,7 @@ mod tests {
         let mut integral = 0f64;
         for _ in 0..n {
             let d = warp::square_to_uniform_sphere([rng.next_f32(), rng.next_f32()]);
-            integral += e.pdf(d) as f64 / warp::uniform_sphere_pdf() as f64;
+            integral += e.pdf(d, false) as f64 / warp::uniform_sphere_pdf() as f64;
         }
         assert!(
             (integral / n as f64 - 1.0).abs() < 0.02,
@@ -327,9 +383,9 @@ mod tests {
         );
         for _ in 0..100 {
             let (d, _, pdf) = e
-                .sample([rng.next_f32(), rng.next_f32()], &Wavelengths::Rgb)
+                .sample([rng.next_f32(), rng.next_f32()], &Wavelengths::Rgb, false)
                 .unwrap();
-            assert!((pdf - e.pdf(d)).abs() < 1e-3 * pdf);
+            assert!((pdf - e.pdf(d, false)).abs() < 1e-3 * pdf);
         }
     }
 
@@ -376,10 +432,10 @@ mod tests {
         let (mut sum, mut sum2, mut max, mut off) = (0f64, 0f64, 0f64, 0);
         for _ in 0..n {
             let (d, l, pdf) = e
-                .sample([rng.next_f32(), rng.next_f32()], &Wavelengths::Rgb)
+                .sample([rng.next_f32(), rng.next_f32()], &Wavelengths::Rgb, false)
                 .unwrap();
             // (The direction's coordinates, recomputed, may fall across a cell's edge.)
-            off += ((pdf - e.pdf(d)).abs() > 1e-3 * pdf) as usize;
+            off += ((pdf - e.pdf(d, false)).abs() > 1e-3 * pdf) as usize;
             let r = l.0[0] as f64 / pdf as f64;
             sum += r;
             sum2 += r * r;

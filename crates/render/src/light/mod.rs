@@ -181,7 +181,9 @@ impl Light {
         })
     }
 
-    /// Samples the light as seen from `p` (with no surface to favour).
+    /// Samples the light as seen from `p` (with no surface to favour, and no other sampling
+    /// technique to share the work with: an environment map samples its whole distribution),
+    /// with the density [`Light::pdf_hit`] or [`Light::pdf_escape`] gives.
     pub fn sample(
         &self,
         geometry: &Geometry,
@@ -190,13 +192,16 @@ impl Light {
         u: [f32; 2],
         lambda: &Wavelengths,
     ) -> Option<LightSample> {
-        self.sample_from(geometry, emissions, &ShadingPoint::at(p), u, lambda)
+        self.sample_with(geometry, emissions, &ShadingPoint::at(p), u, lambda, false)
     }
 
-    /// Samples the light as seen from the shading point `sp` for the path tracer. A constant
-    /// environment or a hemisphere light seen from a point whose BSDF only reflects is sampled
-    /// cosine-weighted about the shading normal (the hemisphere where the BSDF is not zero);
-    /// elsewhere each light samples itself as [`Light::sample`] does.
+    /// Samples the light as seen from the shading point `sp` for the path tracer, whose samples
+    /// MIS weighs against BSDF sampling, with the density [`Light::pdf_hit`] or
+    /// [`Light::pdf_escape_from`] gives. A constant environment or a hemisphere light seen from
+    /// a point whose BSDF only reflects is sampled cosine-weighted about the shading normal
+    /// (the hemisphere where the BSDF is not zero); an environment map samples its compensated
+    /// distribution (see [`Environment`]); elsewhere each light samples itself as
+    /// [`Light::sample`] does.
     #[inline(always)]
     pub fn sample_from(
         &self,
@@ -206,6 +211,20 @@ impl Light {
         u: [f32; 2],
         lambda: &Wavelengths,
     ) -> Option<LightSample> {
+        self.sample_with(geometry, emissions, sp, u, lambda, true)
+    }
+
+    /// [`Light::sample_from`] (`mis`) or [`Light::sample`].
+    #[inline(always)]
+    fn sample_with(
+        &self,
+        geometry: &Geometry,
+        emissions: &[Emission],
+        sp: &ShadingPoint,
+        u: [f32; 2],
+        lambda: &Wavelengths,
+        mis: bool,
+    ) -> Option<LightSample> {
         // A parallelogram (the usual area light) is sampled in the caller: the sample stays in
         // registers rather than going through memory, where it was written in pieces other
         // than those the caller read back (store-forwarding stalls), and no call is made.
@@ -214,10 +233,10 @@ impl Light {
                 return s.filter(LightSample::usable);
             }
         }
-        self.sample_from_general(geometry, emissions, sp, u, lambda)
+        self.sample_from_general(geometry, emissions, sp, u, lambda, mis)
     }
 
-    /// [`Light::sample_from`] for every light but a parallelogram.
+    /// [`Light::sample_with`] for every light but a parallelogram.
     #[inline(never)]
     fn sample_from_general(
         &self,
@@ -226,6 +245,7 @@ impl Light {
         sp: &ShadingPoint,
         u: [f32; 2],
         lambda: &Wavelengths,
+        mis: bool,
     ) -> Option<LightSample> {
         let p = sp.p;
         // Area lights first, on a path of their own (no merge with the other lights' samples).
@@ -288,7 +308,7 @@ impl Light {
                 }
             }
             Light::Environment(e) => {
-                let (wi, li, pdf) = e.sample(u, lambda)?;
+                let (wi, li, pdf) = e.sample(u, lambda, mis)?;
                 LightSample {
                     wi,
                     li,
@@ -342,9 +362,14 @@ impl Light {
         })
     }
 
-    /// The solid-angle density of sampling direction `d` of a light at infinity.
+    /// The solid-angle density with which [`Light::sample`] samples the direction `d` of a
+    /// light at infinity.
     pub fn pdf_escape(&self, d: Vec3) -> f32 {
-        self.pdf_escape_from(d, &ShadingPoint::at(Point3::ORIGIN))
+        match self {
+            Light::Environment(e) => e.pdf(d, false),
+            Light::Hemisphere(h, _) => h.pdf(d),
+            _ => 0.0,
+        }
     }
 
     /// [`Light::escaped`], and [`Light::pdf_escape_from`] at `sp` when it is given (0
@@ -358,7 +383,7 @@ impl Light {
     ) -> (SampledSpectrum, f32) {
         match (self, sp) {
             (Light::Environment(e), Some(sp)) if !self.cosine_sampled(sp) => {
-                e.radiance_and_pdf(d, lambda)
+                e.radiance_and_pdf(d, lambda, true)
             }
             _ => (
                 self.escaped(d, lambda),
@@ -374,7 +399,7 @@ impl Light {
             return warp::cosine_hemisphere_pdf(sp.n.dot(d));
         }
         match self {
-            Light::Environment(e) => e.pdf(d),
+            Light::Environment(e) => e.pdf(d, true),
             Light::Hemisphere(h, _) => h.pdf(d),
             _ => 0.0,
         }
@@ -425,7 +450,8 @@ mod tests {
                 let sp = ShadingPoint::at(p);
                 for u in [[0.1, 0.9], [0.5, 0.5], [0.99, 0.01], [0.3, 0.7]] {
                     let inline = light.sample_from(&geometry, &emissions, &sp, u, &lambda);
-                    let general = light.sample_from_general(&geometry, &emissions, &sp, u, &lambda);
+                    let general =
+                        light.sample_from_general(&geometry, &emissions, &sp, u, &lambda, true);
                     assert_eq!(format!("{inline:?}"), format!("{general:?}"));
                     compared[inline.is_some() as usize] += 1;
                 }
