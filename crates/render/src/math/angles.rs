@@ -25,12 +25,13 @@ pub fn fast_atan2(y: f32, x: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());
     let (lo, hi) = (ax.min(ay), ax.max(ay));
     let a = if hi > 0.0 { lo / hi } else { 0.0 };
+    // Estrin's scheme: the eight terms in three levels of products rather than Horner's seven
+    // in a row, for the latency (an escaped ray's lookup waits on this chain).
     let t = a * a;
-    let mut p = ATAN[7];
-    for &c in ATAN[..7].iter().rev() {
-        p = p * t + c;
-    }
-    let mut r = a * p;
+    let (t2, c) = (t * t, &ATAN);
+    let low = (c[0] + c[1] * t) + t2 * (c[2] + c[3] * t);
+    let high = (c[4] + c[5] * t) + t2 * (c[6] + c[7] * t);
+    let mut r = a * (low + (t2 * t2) * high);
     if ay > ax {
         r = 0.5 * PI - r;
     }
