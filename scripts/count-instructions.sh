@@ -3,11 +3,11 @@
 # callgrind (this machine has no hardware performance counters, and counts do not vary from run
 # to run as times do).
 #
-# For each of the accelerator bench's bounce sets (first-bounce rays leaving a mesh, random rays
-# through it: `accel_compare bounce`), one ray-by-ray pass of each structure runs under callgrind;
-# the inclusive count of that pass (`single_pass`, `single_pass_embree`) over the number of rays is the
-# instructions per ray (the traversal, the leaf tests and the call's setup, nothing else).
-# Under Valgrind both run their AVX2 code (it reports no AVX-512).
+# For each of the accelerator bench's bounce sets (first-bounce rays leaving a mesh, random
+# rays through it: `accel_compare bounce`), one ray-by-ray pass of each structure runs under
+# callgrind; the inclusive count of that pass (`single_pass`, `single_pass_embree`) over the
+# number of rays is the instructions per ray (the traversal, the leaf tests and the call's
+# setup, nothing else). Under Valgrind both run their AVX2 code (it reports no AVX-512).
 #
 # Usage: bash scripts/count-instructions.sh [SUBDIV] [RAYS]   (defaults 145 and 65536: a
 # 250k-triangle mesh, so that the builds take seconds under Valgrind)

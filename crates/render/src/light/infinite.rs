@@ -11,8 +11,8 @@
 //!
 //! Next-event estimation, which multiple importance sampling weighs against BSDF sampling,
 //! samples an image map by its *compensated* distribution (Karlík et al. 2019, "MIS
-//! compensation", as pbrt-v4 does): the luminance bound less its mean over the sphere, clamped at
-//! 0, times sin θ. Directions no brighter than the mean are left to BSDF sampling, which covers
+//! compensation", as pbrt-v4 does): the luminance bound less its mean over the sphere, clamped
+//! at 0, times sin θ. Directions no brighter than the mean are left to BSDF sampling, which covers
 //! them (MIS then gives its samples their full weight), and the light samples go where the map
 //! outshines its average, a sun's disc above all. Sampling without MIS (`Light::sample`, the
 //! radiosity's direct light) keeps the full distribution, whose support is the whole map.
@@ -284,8 +284,8 @@ impl HemisphereLight {
 /// pixel: the largest luminance among the pixels its lookups in the cell read (with bilinear
 /// filtering, the pixels around it too: half a pixel around a small sun is still bright; the
 /// cells are where the lookups land, with the texture's scale and offset); the distributions
-/// multiply it by sin θ at the cell's centre. An upper bound of the radiance over the cell, so that no direction of high
-/// radiance has a low density. (A cell's centre alone left a sun's rim, and with Mitsuba's
+/// multiply it by sin θ at the cell's centre. An upper bound of the radiance over the cell, so
+/// that no direction of high radiance has a low density. (A cell's centre alone left a sun's rim, and with Mitsuba's
 /// half-texel offset part of the sun itself, to sky-level densities, whose rare samples were
 /// fireflies: the ratio of radiance to density reached 430 times its mean with a 3-pixel sun;
 /// Mitsuba samples its bilinear interpolation itself.)
