@@ -285,10 +285,10 @@ impl HemisphereLight {
 /// filtering, the pixels around it too: half a pixel around a small sun is still bright; the
 /// cells are where the lookups land, with the texture's scale and offset); the distributions
 /// multiply it by sin θ at the cell's centre. An upper bound of the radiance over the cell, so
-/// that no direction of high radiance has a low density. (A cell's centre alone left a sun's rim, and with Mitsuba's
-/// half-texel offset part of the sun itself, to sky-level densities, whose rare samples were
-/// fireflies: the ratio of radiance to density reached 430 times its mean with a 3-pixel sun;
-/// Mitsuba samples its bilinear interpolation itself.)
+/// that no direction of high radiance has a low density. (A cell's centre alone left a sun's
+/// rim, and with Mitsuba's half-texel offset part of the sun itself, to sky-level densities,
+/// whose rare samples were fireflies: the ratio of radiance to density reached 430 times its
+/// mean with a 3-pixel sun; Mitsuba samples its bilinear interpolation itself.)
 fn cell_maxima(t: &crate::texture::ImageTexture) -> Vec<f32> {
     use crate::texture::{Filter, Wrap};
     let (w, h) = (t.image.width(), t.image.height());
