@@ -463,6 +463,19 @@ fn chi2_ellipsoid_from_outside() {
     }
 }
 
+/// The χ² test of a light at infinity: directions binned over the whole sphere, every sample
+/// one (density of mass 1).
+fn whole_sphere(name: &str, level: f64) -> Chi2<'_> {
+    Chi2 {
+        name,
+        grid: Grid::new(Vec3::Z, 1.0, ROWS),
+        samples: SAMPLES,
+        seed: seed(name),
+        expected_mass: Some(1.0),
+        level,
+    }
+}
+
 // Lights at infinity: the environment map's directions follow its luminance × sin θ
 // distribution converted to solid angle (pdf_uv / (2π² sin θ)), through a rotated frame; black
 // texels are never sampled; the constant environment and the hemisphere light sample uniformly.
@@ -472,14 +485,7 @@ fn chi2_infinite_lights() {
     let s = SceneBuilder::new().build(AccelKind::None);
     let mut failures = Vec::new();
     for (name, light) in infinite_cases() {
-        let t = Chi2 {
-            name,
-            grid: Grid::new(Vec3::Z, 1.0, ROWS),
-            samples: SAMPLES,
-            seed: seed(name),
-            expected_mass: Some(1.0),
-            level,
-        };
+        let t = whole_sphere(name, level);
         let p = Point3::ORIGIN;
         match t.run(
             |u| visible_sample(&s, &light, p, [u[0], u[1]]).map(|(d, p, _)| (d, p)),
@@ -507,14 +513,7 @@ fn chi2_environment_map_compensated() {
         reflect_only: false,
     };
     let name = "environment map, compensated";
-    let t = Chi2 {
-        name,
-        grid: Grid::new(Vec3::Z, 1.0, ROWS),
-        samples: SAMPLES,
-        seed: seed(name),
-        expected_mass: Some(1.0),
-        level,
-    };
+    let t = whole_sphere(name, level);
     match t.run(
         |u| {
             light
