@@ -189,6 +189,22 @@ impl Film {
         }
     }
 
+    /// Adds the radiance sums `sums` (channels 0 to 2, one entry per pixel of `rect`, row-major)
+    /// to the pixels of `rect` inside the window (splatted samples: the counts stay).
+    pub(crate) fn add_radiance(&mut self, rect: Window, sums: &[[i128; 3]]) {
+        let c = self.channels;
+        let w = self.window;
+        for y in rect.y0.max(w.y0)..rect.y1.min(w.y1) {
+            for x in rect.x0.max(w.x0)..rect.x1.min(w.x1) {
+                let at = ((y - w.y0) * w.width() + (x - w.x0)) * c;
+                let s = &sums[(y - rect.y0) * rect.width() + (x - rect.x0)];
+                for ch in 0..3 {
+                    self.sums[at + ch] += s[ch];
+                }
+            }
+        }
+    }
+
     /// Adds another film of the same image and channels (its window inside this one's): the
     /// sums and counts of every pixel it holds.
     pub fn merge(&mut self, other: &Film) -> Result<(), String> {

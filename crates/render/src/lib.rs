@@ -27,6 +27,7 @@ pub mod scene;
 pub mod shape;
 pub(crate) mod simd;
 pub mod spectrum;
+pub mod splat;
 pub mod stats;
 pub mod texture;
 

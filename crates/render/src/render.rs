@@ -9,6 +9,12 @@
 //! samples (passes, tiles, crops, separate processes merged later) gives the same bits as one
 //! uninterrupted render. [`render`] is one pass of every sample.
 //!
+//! With a filter wider than the box (and no output variables), samples are splatted to the
+//! pixels around them ([`crate::splat`]): each tile then also sums the shares its samples give
+//! the pixels beyond its edges, which the film adds, and a window is rendered with a border of
+//! the pixels whose samples reach it (their own sums stay out of the film), so that a window
+//! gets the same bits as the same pixels of the whole frame.
+//!
 //! Samples whose radiance is NaN or infinite are rejected (counted in
 //! [`RayStats::rejected_samples`]): they count as samples but contribute zero.
 
@@ -22,6 +28,7 @@ use crate::sampling::pcg::{hash2, unit_pair};
 use crate::sampling::{SampleCursor, Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
+use crate::splat::{Splat, FLUSH_EVERY};
 use crate::stats::RayStats;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -118,8 +125,36 @@ pub fn render_pass(
         .unwrap_or_default()
 }
 
-/// A finished tile: its pixels, their fixed-point sums and counts, and its counters.
-type TileSums = (Window, Vec<i128>, Vec<u32>, RayStats);
+/// A finished tile: its pixels inside the film's window (none for a tile of the border that
+/// splatting renders around a window), their fixed-point sums and counts, the radiance its
+/// samples splat (the pixels it reaches and their sums), and its counters.
+type TileSums = (
+    Option<Window>,
+    Vec<i128>,
+    Vec<u32>,
+    Option<(Window, Vec<[i128; 3]>)>,
+    RayStats,
+);
+
+/// The pixels `w` and `o` share, if any.
+fn intersection(w: Window, o: Window) -> Option<Window> {
+    w.overlaps(&o).then(|| Window {
+        x0: w.x0.max(o.x0),
+        x1: w.x1.min(o.x1),
+        y0: w.y0.max(o.y0),
+        y1: w.y1.min(o.y1),
+    })
+}
+
+/// `w` grown by `m` pixels on every side, within a `width × height` image.
+fn grown(w: Window, m: usize, (width, height): (usize, usize)) -> Window {
+    Window {
+        x0: w.x0.saturating_sub(m),
+        x1: (w.x1 + m).min(width),
+        y0: w.y0.saturating_sub(m),
+        y1: (w.y1 + m).min(height),
+    }
+}
 
 /// [`render_pass`] that gives up when `cancel` becomes true: tiles not yet started are skipped
 /// and, if any was, the film is left as it was and `None` is returned (a pass is added whole or
@@ -140,35 +175,78 @@ pub fn render_pass_or_cancel(
         3 + settings.aovs.channels(),
         "the film has a channel per radiance component and output variable"
     );
-    let tiles_x = win.width().div_ceil(TILE);
-    let tiles_y = win.height().div_ceil(TILE);
-    let filter = FilterSampler::new(settings.filter);
+    let size = (settings.width, settings.height);
+    // Splatting (output variables keep the filter's importance sampling: a denoiser reads
+    // them with the radiance, and expects pixels whose noise is their own).
+    let splat = if settings.aovs.is_empty() {
+        Splat::new(
+            settings.filter,
+            settings.width,
+            settings.height,
+            settings.spp,
+        )
+    } else {
+        None
+    };
+    // The pixels rendered: the window, and around it those whose samples reach it.
+    let region = match &splat {
+        Some(s) => grown(win, s.margin(), size),
+        None => win,
+    };
+    let tiles_x = region.width().div_ceil(TILE);
+    let tiles_y = region.height().div_ceil(TILE);
+    // Splatted samples are placed uniformly in their pixels (the box's sampling).
+    let filter = FilterSampler::new(if splat.is_some() {
+        Filter::Box
+    } else {
+        settings.filter
+    });
     let tiles: Option<Vec<TileSums>> = (0..tiles_x * tiles_y)
         .into_par_iter()
         // Each worker's runs (their samplers are large) serve tile after tile.
         .map_init(
-            || Runs::new(scene, integrator, settings, &filter),
+            || Runs::new(scene, integrator, settings, &filter, splat.as_ref()),
             |runs, tile| {
                 if cancel.load(Ordering::Relaxed) {
                     return None;
                 }
-                let x0 = win.x0 + (tile % tiles_x) * TILE;
-                let y0 = win.y0 + (tile / tiles_x) * TILE;
+                let x0 = region.x0 + (tile % tiles_x) * TILE;
+                let y0 = region.y0 + (tile / tiles_x) * TILE;
                 let rect = Window {
                     x0,
-                    x1: (x0 + TILE).min(win.x1),
+                    x1: (x0 + TILE).min(region.x1),
                     y0,
-                    y1: (y0 + TILE).min(win.y1),
+                    y1: (y0 + TILE).min(region.y1),
                 };
+                let own = intersection(rect, win);
                 let mut stats = RayStats::default();
-                let mut sums = Vec::with_capacity(rect.pixels() * film_channels);
-                let mut counts = Vec::with_capacity(rect.pixels());
-                // The radiance sums of the tile's pixels, in rows.
-                let mut radiance = vec![[0i128; 3]; rect.pixels()];
+                let n_own = own.map_or(0, |o| o.pixels());
+                let mut sums = Vec::with_capacity(n_own * film_channels);
+                let mut counts = Vec::with_capacity(n_own);
+                // The radiance sums of the pixels the tile's samples reach, in rows.
+                let reach = match &splat {
+                    Some(s) => grown(rect, s.margin(), size),
+                    None => rect,
+                };
+                runs.tile = rect;
+                runs.reach = reach;
+                if splat.is_some() {
+                    runs.quick.clear();
+                    runs.quick.resize(reach.pixels(), [0; 3]);
+                }
+                let mut radiance = vec![[0i128; 3]; reach.pixels()];
                 for (k, (x, y)) in rect.points().enumerate() {
                     runs.add_pixel((x, y), k, (first, last), &mut radiance, &mut stats);
                 }
                 runs.trace(&mut radiance, &mut stats);
+                if splat.is_some() {
+                    for _ in 0..n_own {
+                        sums.extend_from_slice(&[0; 3]);
+                        counts.push(last.saturating_sub(first));
+                    }
+                    progress(n_own as u64 * (last - first) as u64);
+                    return Some((own, sums, counts, Some((reach, radiance)), stats));
+                }
                 let sampler = runs.sampler();
                 for ((x, y), sum) in rect.points().zip(&radiance) {
                     sums.extend_from_slice(sum);
@@ -186,14 +264,19 @@ pub fn render_pass_or_cancel(
                     counts.push(last.saturating_sub(first));
                 }
                 progress(rect.pixels() as u64 * (last - first) as u64);
-                Some((rect, sums, counts, stats))
+                Some((Some(rect), sums, counts, None, stats))
             },
         )
         .collect();
     let mut stats = RayStats::default();
-    for (rect, sums, counts, s) in tiles? {
+    for (own, sums, counts, splats, s) in tiles? {
         stats += s;
-        film.add_block(rect, &sums, &counts);
+        if let Some(own) = own {
+            film.add_block(own, &sums, &counts);
+        }
+        if let Some((reach, radiance)) = splats {
+            film.add_radiance(reach, &radiance);
+        }
     }
     Some(stats)
 }
@@ -210,6 +293,15 @@ struct Runs<'a> {
     integrator: &'a dyn Integrator,
     settings: &'a RenderSettings,
     filter: &'a FilterSampler,
+    /// Splatting, with the tile being rendered and the pixels its samples reach (the pixels
+    /// of the tile's sums).
+    splat: Option<&'a Splat>,
+    tile: Window,
+    reach: Window,
+    /// The 64-bit splat sums of the tile (see [`Splat::add`]), and the samples added to them
+    /// since they were last moved to the tile's sums.
+    quick: Vec<[i64; 3]>,
+    pending: u32,
     /// One sampler per run (their tables are large: kept by the worker from tile to tile).
     samplers: Vec<Sampler>,
     /// Runs gathered, samples gathered.
@@ -218,6 +310,8 @@ struct Runs<'a> {
     /// Per sample: camera ray, filter weight, wavelengths, cursor, run, pixel (in the tile).
     rays: Box<[Ray; BATCH_SAMPLES]>,
     weights: [f32; BATCH_SAMPLES],
+    /// Per sample: its position in its pixel (from the corner; splatting reads it).
+    offsets: [[f32; 2]; BATCH_SAMPLES],
     lambdas: [Wavelengths; BATCH_SAMPLES],
     cursors: Box<[SampleCursor; BATCH_SAMPLES]>,
     samplers_of: [u8; BATCH_SAMPLES],
@@ -234,18 +328,26 @@ impl<'a> Runs<'a> {
         integrator: &'a dyn Integrator,
         settings: &'a RenderSettings,
         filter: &'a FilterSampler,
+        splat: Option<&'a Splat>,
     ) -> Self {
         let sampler = Sampler::new(0, 0);
+        let tile = Window::full(settings.width, settings.height);
         Self {
             scene,
             integrator,
             settings,
             filter,
+            splat,
+            tile,
+            reach: tile,
+            quick: Vec::new(),
+            pending: 0,
             samplers: vec![sampler.clone(); BATCH_RUNS],
             runs: 0,
             len: 0,
             rays: Box::new([Ray::new(Point3::ORIGIN, Vec3::X); BATCH_SAMPLES]),
             weights: [1.0; BATCH_SAMPLES],
+            offsets: [[0.5; 2]; BATCH_SAMPLES],
             lambdas: [Wavelengths::Rgb; BATCH_SAMPLES],
             cursors: Box::new([sampler.cursor(); BATCH_SAMPLES]),
             samplers_of: [0; BATCH_SAMPLES],
@@ -290,9 +392,12 @@ impl<'a> Runs<'a> {
                     let offset;
                     (offset, self.weights[j]) = self.filter.sample(sampler.pixel_sample(i));
                     self.screen[j] = screen_point((w, h), (x, y), offset);
+                    self.offsets[j] = offset;
                 } else {
-                    (self.rays[j], self.weights[j]) =
-                        camera_ray(self.scene, (w, h), (x, y), i, (sampler, self.filter));
+                    let (offset, weight) = self.filter.sample(sampler.pixel_sample(i));
+                    self.rays[j] =
+                        ray_through(self.scene, (w, h), (x, y), offset, || sampler.next_2d());
+                    (self.weights[j], self.offsets[j]) = (weight, offset);
                 }
                 // The sample's wavelengths: the number after the camera's.
                 self.lambdas[j] = if spectral {
@@ -344,14 +449,34 @@ impl<'a> Runs<'a> {
             let (l, weight) = (self.lambdas[j].to_rgb(self.radiance[j]), self.weights[j]);
             let l = if weight == 1.0 { l } else { l * weight };
             stats.samples += 1;
-            if l.is_finite() {
+            if !l.is_finite() {
+                stats.rejected_samples += 1;
+            } else if let Some(splat) = self.splat {
+                let k = self.pixels[j] as usize;
+                let tw = self.tile.width();
+                let pixel = (self.tile.x0 + k % tw, self.tile.y0 + k / tw);
+                splat.add(
+                    (radiance, &mut self.quick),
+                    self.reach,
+                    pixel,
+                    self.offsets[j],
+                    l,
+                );
+                self.pending += 1;
+                if self.pending == FLUSH_EVERY {
+                    Splat::flush(radiance, &mut self.quick);
+                    self.pending = 0;
+                }
+            } else {
                 let sum = &mut radiance[self.pixels[j] as usize];
                 sum[0] += to_fixed(l.r);
                 sum[1] += to_fixed(l.g);
                 sum[2] += to_fixed(l.b);
-            } else {
-                stats.rejected_samples += 1;
             }
+        }
+        if self.pending != 0 {
+            Splat::flush(radiance, &mut self.quick);
+            self.pending = 0;
         }
         self.runs = 0;
         self.len = 0;
@@ -628,45 +753,119 @@ mod tests {
 
     /// One uninterrupted render against the same samples split over passes (any boundaries),
     /// over windows rendered apart and merged, and over thread counts: the same film, bit for
-    /// bit.
+    /// bit; with each pixel's samples in it (the box), and splatted over their neighbours
+    /// (wider filters, negative lobes included), where a window's edge pixels take the samples
+    /// of pixels outside it.
     #[test]
     fn any_split_of_the_samples_gives_the_same_bits() {
         let s = scene();
-        let settings = RenderSettings {
-            width: 23,
-            height: 17,
-            spp: 21,
-            seed: 5,
-            ..Default::default()
-        };
-        let full = Window::full(23, 17);
-        // The noise integrator's values are its sample's random numbers: every sample differs.
-        let path = Noise;
-        let mut whole = Film::new(23, 17, full, 3);
-        render_pass(&s, &path, &settings, &mut whole, (0, 21), &|_| {});
-        let mut passes = Film::new(23, 17, full, 3);
-        for range in [(0, 1), (1, 4), (4, 5), (5, 17), (17, 21)] {
-            render_pass(&s, &path, &settings, &mut passes, range, &|_| {});
+        for filter in [
+            Filter::Box,
+            Filter::Gaussian { stddev: 0.5 },
+            Filter::Tent { radius: 1.0 },
+            Filter::Lanczos { lobes: 3 },
+        ] {
+            let settings = RenderSettings {
+                width: 23,
+                height: 17,
+                spp: 21,
+                seed: 5,
+                filter,
+                ..Default::default()
+            };
+            let full = Window::full(23, 17);
+            // The noise integrator's values are its sample's random numbers: every sample
+            // differs.
+            let path = Noise;
+            let mut whole = Film::new(23, 17, full, 3);
+            render_pass(&s, &path, &settings, &mut whole, (0, 21), &|_| {});
+            let mut passes = Film::new(23, 17, full, 3);
+            for range in [(0, 1), (1, 4), (4, 5), (5, 17), (17, 21)] {
+                render_pass(&s, &path, &settings, &mut passes, range, &|_| {});
+            }
+            assert_eq!(passes, whole, "{filter:?}");
+            let mut merged = Film::new(23, 17, full, 3);
+            for (x0, x1, y0, y1) in [(0, 9, 0, 17), (9, 23, 0, 5), (9, 23, 5, 17)] {
+                let w = Window { x0, x1, y0, y1 };
+                let mut part = Film::new(23, 17, w, 3);
+                render_pass(&s, &path, &settings, &mut part, (0, 10), &|_| {});
+                render_pass(&s, &path, &settings, &mut part, (10, 21), &|_| {});
+                merged.merge(&part).unwrap();
+            }
+            assert_eq!(merged, whole, "{filter:?}");
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(3)
+                .build()
+                .unwrap();
+            let mut threaded = Film::new(23, 17, full, 3);
+            pool.install(|| render_pass(&s, &path, &settings, &mut threaded, (0, 21), &|_| {}));
+            assert_eq!(threaded, whole, "{filter:?}");
+            assert!(whole.samples() == 23 * 17 * 21);
+            assert!(whole.sums().iter().filter(|&&v| v != 0).count() > 23 * 17 * 2);
         }
-        assert_eq!(passes, whole);
-        let mut merged = Film::new(23, 17, full, 3);
-        for (x0, x1, y0, y1) in [(0, 9, 0, 17), (9, 23, 0, 5), (9, 23, 5, 17)] {
-            let w = Window { x0, x1, y0, y1 };
-            let mut part = Film::new(23, 17, w, 3);
-            render_pass(&s, &path, &settings, &mut part, (0, 10), &|_| {});
-            render_pass(&s, &path, &settings, &mut part, (10, 21), &|_| {});
-            merged.merge(&part).unwrap();
+    }
+
+    /// An edge (1 left of the middle of the image, 0 right of it) rendered with splatting
+    /// comes out as the filter's normalised convolution of it, the image Mitsuba's film
+    /// converges to: `∫ g(c − s) step(s) ds / ∫ g(c − s) ds` over the image's columns, in
+    /// every column, the first and last ones (where the filter is clipped) included.
+    #[test]
+    fn splatted_edges_are_the_filtered_image() {
+        struct Edge;
+        impl Integrator for Edge {
+            fn radiance(
+                &self,
+                _: &Scene,
+                ray: &Ray,
+                _: &mut Wavelengths,
+                _: &mut Sampler,
+                _: &mut RayStats,
+            ) -> SampledSpectrum {
+                // (This camera's y axis is the image's x axis, leftwards.)
+                if ray.d.y > 0.0 {
+                    SampledSpectrum::ONE
+                } else {
+                    SampledSpectrum::ZERO
+                }
+            }
         }
-        assert_eq!(merged, whole);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap();
-        let mut threaded = Film::new(23, 17, full, 3);
-        pool.install(|| render_pass(&s, &path, &settings, &mut threaded, (0, 21), &|_| {}));
-        assert_eq!(threaded, whole);
-        assert!(whole.samples() == 23 * 17 * 21);
-        assert!(whole.sums().iter().filter(|&&v| v != 0).count() > 23 * 17 * 2);
+        let s = scene();
+        let (w, h) = (12, 6);
+        for filter in [
+            Filter::Gaussian { stddev: 0.5 },
+            Filter::Mitchell {
+                b: 1.0 / 3.0,
+                c: 1.0 / 3.0,
+            },
+            Filter::Tent { radius: 1.5 },
+        ] {
+            let settings = RenderSettings {
+                width: w,
+                height: h,
+                spp: 1024,
+                filter,
+                ..Default::default()
+            };
+            let out = render(&s, &Edge, &settings, &|_| {});
+            let integral = |c: f64, a: f64, b: f64| {
+                let n = 20000;
+                let dh = (b - a) / n as f64;
+                (0..n)
+                    .map(|k| filter.eval_1d(c - (a + (k as f64 + 0.5) * dh)) * dh)
+                    .sum::<f64>()
+            };
+            for x in 0..w {
+                let c = x as f64 + 0.5;
+                let expected = integral(c, 0.0, w as f64 / 2.0) / integral(c, 0.0, w as f64);
+                for y in 0..h {
+                    let v = out.image.get(x, y).r as f64;
+                    assert!(
+                        (v - expected).abs() < 2e-3,
+                        "{filter:?} ({x}, {y}): {v} vs {expected}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
