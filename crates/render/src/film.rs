@@ -39,8 +39,8 @@ pub fn from_fixed(s: i128) -> f64 {
     s as f64 * 2f64.powi(-FIXED_SHIFT)
 }
 
-/// A rectangle of pixels, `[x0, x1) × [y0, y1)`, row 0 at the top.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// A rectangle of pixels, `[x0, x1) × [y0, y1)`, row 0 at the top (`Default`: empty).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Window {
     /// First column.
     pub x0: usize,

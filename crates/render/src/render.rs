@@ -19,6 +19,7 @@
 //! [`RayStats::rejected_samples`]): they count as samples but contribute zero.
 
 use crate::aov::{aov_sample, emission_aa as emission_aa_of, near_light_edge, Aov, AovSet};
+use crate::color::Rgb;
 use crate::film::{to_fixed, Film, Window};
 use crate::filter::{Filter, FilterSampler};
 use crate::image::Image;
@@ -28,7 +29,7 @@ use crate::sampling::pcg::{hash2, unit_pair};
 use crate::sampling::{SampleCursor, Sampler, SamplerKind};
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
-use crate::splat::{Splat, FLUSH_EVERY};
+use crate::splat::{Splat, SplatSums};
 use crate::stats::RayStats;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -231,8 +232,7 @@ pub fn render_pass_or_cancel(
                 runs.tile = rect;
                 runs.reach = reach;
                 if splat.is_some() {
-                    runs.quick.clear();
-                    runs.quick.resize(reach.pixels(), [0; 3]);
+                    runs.quick.reset(reach);
                 }
                 let mut radiance = vec![[0i128; 3]; reach.pixels()];
                 for (k, (x, y)) in rect.points().enumerate() {
@@ -240,6 +240,7 @@ pub fn render_pass_or_cancel(
                 }
                 runs.trace(&mut radiance, &mut stats);
                 if splat.is_some() {
+                    runs.quick.flush(&mut radiance);
                     for _ in 0..n_own {
                         sums.extend_from_slice(&[0; 3]);
                         counts.push(last.saturating_sub(first));
@@ -298,10 +299,8 @@ struct Runs<'a> {
     splat: Option<&'a Splat>,
     tile: Window,
     reach: Window,
-    /// The 64-bit splat sums of the tile (see [`Splat::add`]), and the samples added to them
-    /// since they were last moved to the tile's sums.
-    quick: Vec<[i64; 3]>,
-    pending: u32,
+    /// The 64-bit splat sums of the tile (see [`Splat::add`]).
+    quick: SplatSums,
     /// One sampler per run (their tables are large: kept by the worker from tile to tile).
     samplers: Vec<Sampler>,
     /// Runs gathered, samples gathered.
@@ -310,8 +309,10 @@ struct Runs<'a> {
     /// Per sample: camera ray, filter weight, wavelengths, cursor, run, pixel (in the tile).
     rays: Box<[Ray; BATCH_SAMPLES]>,
     weights: [f32; BATCH_SAMPLES],
-    /// Per sample: its position in its pixel (from the corner; splatting reads it).
+    /// Per sample: its position in its pixel (from the corner) and its value (splatting
+    /// reads them).
     offsets: [[f32; 2]; BATCH_SAMPLES],
+    rgb: Box<[Rgb; BATCH_SAMPLES]>,
     lambdas: [Wavelengths; BATCH_SAMPLES],
     cursors: Box<[SampleCursor; BATCH_SAMPLES]>,
     samplers_of: [u8; BATCH_SAMPLES],
@@ -340,14 +341,14 @@ impl<'a> Runs<'a> {
             splat,
             tile,
             reach: tile,
-            quick: Vec::new(),
-            pending: 0,
+            quick: SplatSums::default(),
             samplers: vec![sampler.clone(); BATCH_RUNS],
             runs: 0,
             len: 0,
             rays: Box::new([Ray::new(Point3::ORIGIN, Vec3::X); BATCH_SAMPLES]),
             weights: [1.0; BATCH_SAMPLES],
             offsets: [[0.5; 2]; BATCH_SAMPLES],
+            rgb: Box::new([Rgb::BLACK; BATCH_SAMPLES]),
             lambdas: [Wavelengths::Rgb; BATCH_SAMPLES],
             cursors: Box::new([sampler.cursor(); BATCH_SAMPLES]),
             samplers_of: [0; BATCH_SAMPLES],
@@ -451,22 +452,9 @@ impl<'a> Runs<'a> {
             stats.samples += 1;
             if !l.is_finite() {
                 stats.rejected_samples += 1;
-            } else if let Some(splat) = self.splat {
-                let k = self.pixels[j] as usize;
-                let tw = self.tile.width();
-                let pixel = (self.tile.x0 + k % tw, self.tile.y0 + k / tw);
-                splat.add(
-                    (radiance, &mut self.quick),
-                    self.reach,
-                    pixel,
-                    self.offsets[j],
-                    l,
-                );
-                self.pending += 1;
-                if self.pending == FLUSH_EVERY {
-                    Splat::flush(radiance, &mut self.quick);
-                    self.pending = 0;
-                }
+                self.rgb[j] = Rgb::BLACK;
+            } else if self.splat.is_some() {
+                self.rgb[j] = l;
             } else {
                 let sum = &mut radiance[self.pixels[j] as usize];
                 sum[0] += to_fixed(l.r);
@@ -474,9 +462,14 @@ impl<'a> Runs<'a> {
                 sum[2] += to_fixed(l.b);
             }
         }
-        if self.pending != 0 {
-            Splat::flush(radiance, &mut self.quick);
-            self.pending = 0;
+        if let Some(splat) = self.splat {
+            let (tile, pixels, offsets, rgb) = (self.tile, &self.pixels, &self.offsets, &self.rgb);
+            let tw = tile.width();
+            let samples = (0..n).map(|j| {
+                let k = pixels[j] as usize;
+                ((tile.x0 + k % tw, tile.y0 + k / tw), offsets[j], rgb[j])
+            });
+            splat.add(&mut self.quick, radiance, samples);
         }
         self.runs = 0;
         self.len = 0;
@@ -623,7 +616,6 @@ fn aov_pixel(
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
-    use crate::color::Rgb;
     use crate::material::Material;
     use crate::math::{Point3, Ray, Transform, Vec3};
     use crate::scene::SceneBuilder;

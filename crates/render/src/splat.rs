@@ -31,10 +31,6 @@ use crate::filter::Filter;
 /// Intervals of the table of `g` over `[0, radius]`.
 pub const TABLE: usize = 2048;
 
-/// The most pixels per axis whose weights [`Splat::add`] keeps in an array (a filter of
-/// radius up to 8); wider filters compute them cell by cell.
-const TAPS: usize = 17;
-
 /// The most samples [`Splat::add`] may add before a [`Splat::flush`].
 pub const FLUSH_EVERY: u32 = 256;
 
@@ -53,9 +49,23 @@ pub struct Splat {
     /// Per column and per row, 1 / its share of the normaliser `C` (`C = Cx · Cy`).
     inv_x: Vec<f32>,
     inv_y: Vec<f32>,
-    /// Every weight a sample gives is below 4 (the products of [`Splat::add`] fit in 64 bits).
+    /// Every weight a sample gives is below 2 along each axis (the products of [`Splat::add`]
+    /// fit in 64 bits).
     small_weights: bool,
+    /// Samples away from the image's edges (see [`Splat::interior`]): per position in the
+    /// pixel rounded to 1/[`STEPS`], the offset of the first pixel reached (from the sample's
+    /// own) and the weights along the axis of the pixels reached, in units of 2⁻¹⁴ (0 past
+    /// the last one), from the normaliser of the pixels away from the edges.
+    steps: Vec<(isize, [i32; 8])>,
+    /// How many pixels per axis a sample away from the edges reaches at most (0: no such
+    /// samples are taken from `steps`).
+    step_taps: usize,
 }
+
+/// Positions per pixel (per axis) of the table of samples away from the image's edges: a
+/// sample's position is rounded to the nearest (1/512 of a pixel at most, on either side
+/// alike), which changes the expected image by about 10⁻⁶ of the filter's curvature.
+pub const STEPS: usize = 256;
 
 impl Splat {
     /// Splatting for `filter` on a `width × height` image whose pixels take `spp` samples each
@@ -81,18 +91,73 @@ impl Splat {
             inv_x: Vec::new(),
             inv_y: Vec::new(),
             small_weights: false,
+            steps: Vec::new(),
+            step_taps: 0,
         };
         let centred = spp == 1;
-        s.inv_x = (0..width)
-            .map(|x| s.inverse_share(x, width, centred))
-            .collect();
-        s.inv_y = (0..height)
-            .map(|y| s.inverse_share(y, height, centred))
-            .collect();
+        // (Only the pixels the filter's edge can reach from outside the image differ from
+        // the ones in the middle.)
+        let shares = |n: usize| -> Vec<f32> {
+            let inner = s.inverse_share(n / 2, n, centred);
+            (0..n)
+                .map(|p| {
+                    if p <= margin || p + margin + 1 >= n {
+                        s.inverse_share(p, n, centred)
+                    } else {
+                        inner
+                    }
+                })
+                .collect()
+        };
+        (s.inv_x, s.inv_y) = (shares(width), shares(height));
+        s.tabulate_steps(s.inverse_share(width / 2, width, centred));
         let peak = s.table.iter().fold(0f32, |m, v| m.max(v.abs()));
         let most = |v: &[f32]| v.iter().fold(0f32, |m, v| m.max(v.abs()));
-        s.small_weights = peak * peak * most(&s.inv_x) * most(&s.inv_y) < 3.99;
+        s.small_weights = peak * most(&s.inv_x) < 1.99 && peak * most(&s.inv_y) < 1.99;
+        if peak * most(&s.inv_x).max(most(&s.inv_y)) >= 255.0 {
+            // (Weights beyond `axis_weight`'s range: no such filter is valid.)
+            return None;
+        }
         Some(s)
+    }
+
+    /// The table of samples away from the edges (see [`Splat::steps`]), for pixels whose
+    /// normaliser's share is 1 / `inner` along each axis.
+    fn tabulate_steps(&mut self, inner: f32) {
+        let r = self.radius as f64;
+        let mut taps = 0;
+        self.steps = (0..=STEPS)
+            .map(|i| {
+                let o = i as f64 / STEPS as f64;
+                // The pixels j (from the sample's own) with |j + 0.5 − o| < r.
+                let first = (o - 0.5 - r).floor() as isize + 1;
+                let mut w = [0i32; 8];
+                let mut n = 0;
+                for (k, w) in w.iter_mut().enumerate() {
+                    let j = first + k as isize;
+                    if (j as f64 + 0.5 - o).abs() < r {
+                        *w = axis_weight(self.g((j as f64 + 0.5 - o) as f32) * inner);
+                        n = k + 1;
+                    }
+                }
+                taps = taps.max(n);
+                (first, w)
+            })
+            .collect();
+        // (Filters reaching more than eight pixels per axis take the general path.)
+        self.step_taps = if taps <= 8 && (-self.steps[0].0) as usize <= self.margin {
+            taps
+        } else {
+            0
+        };
+    }
+
+    /// True when a sample in column or row `c` of an axis of `n` pixels reaches only pixels
+    /// whose normaliser is the one of the middle (see [`Splat::new`]).
+    #[inline(always)]
+    fn interior(&self, c: usize, n: usize) -> bool {
+        let m = self.margin;
+        c > 2 * m && c + 2 * m + 2 <= n
     }
 
     /// How many pixels beyond its own, per side, a sample reaches.
@@ -144,93 +209,244 @@ impl Splat {
         }
     }
 
-    /// Adds the shares of the sample of value `l` at `offset` (from the corner, in `[0, 1)²`)
-    /// in pixel `(x, y)` to the sums of the pixels of `rect` (row-major); pixels outside
-    /// `rect` get nothing. The sums are `wide`, plus what `quick` holds until
-    /// [`Splat::flush`] moves it there, which must come after at most [`FLUSH_EVERY`] samples.
+    /// Adds the shares of `samples` (each its pixel, its position in it from the corner, in
+    /// `[0, 1)²`, and its value) to the sums `wide` of the pixels of `sums`' window
+    /// (row-major, three channels); pixels outside the window get nothing.
     ///
     /// In fixed point as integers, not through [`crate::film::to_fixed`] per share: the value
-    /// in units of 2⁻²⁴ (clamped at ±2³⁸) times the share's weight in units of 2⁻²⁴ is the
-    /// share in the film's units of 2⁻⁴⁸, one integer product per channel (the conversions
-    /// took a third of a Cornell box's frame). Both factors are functions of the sample alone,
-    /// so the sums stay exact in any order; the rounding of the weight to 2⁻²⁴ is unbiased
-    /// over the sample's position. Values below 32 with weights below 4 (nearly all) give
-    /// shares below 2⁵⁵, which `quick` sums in 64 bits ([`FLUSH_EVERY`] of them at most
-    /// before a flush); the others go to `wide` in 128 bits.
-    #[inline]
-    pub fn add(
+    /// rounded to units of 2⁻²⁰ (clamped at ±2³⁸) times the share's weight in units of 2⁻²⁸
+    /// (the product of its weights along x and y, each rounded to 2⁻¹⁴) is the share in the
+    /// film's units of 2⁻⁴⁸, one integer product per channel. Both factors
+    /// are functions of the sample alone, so the sums stay exact in any order. Values below 32
+    /// with weights below 4 (nearly all samples) give shares below 2⁵⁵, which `sums` adds up
+    /// in 64 bits, a row of four or eight pixels at a time (the compiler vectorises it, with
+    /// the widest instructions the CPU has: integer arithmetic gives the same bits at every
+    /// width), and moves to `wide` every [`FLUSH_EVERY`] samples; other samples go to `wide`
+    /// directly, in 128 bits.
+    pub fn add<I: Iterator<Item = ((usize, usize), [f32; 2], Rgb)>>(
         &self,
-        (wide, quick): (&mut [[i128; 3]], &mut [[i64; 3]]),
-        rect: Window,
+        sums: &mut SplatSums,
+        wide: &mut [[i128; 3]],
+        samples: I,
+    ) {
+        crate::simd::run_auto_at(
+            crate::simd::SimdLevel::detected(),
+            AddKernel {
+                splat: self,
+                sums,
+                wide,
+                samples,
+            },
+        );
+    }
+
+    /// [`Splat::add`] for one sample.
+    #[inline(always)]
+    fn add_one(
+        &self,
+        sums: &mut SplatSums,
+        wide: &mut [[i128; 3]],
         (x, y): (usize, usize),
         offset: [f32; 2],
         l: Rgb,
     ) {
-        const UNIT: f32 = (1u32 << 24) as f32;
         const MAX: f32 = (1u64 << 38) as f32;
-        let r = self.radius;
-        let (sx, sy) = (x as f32 + offset[0], y as f32 + offset[1]);
-        // The pixels q with |q + 0.5 − s| < r (a few more at worst, whose weight is 0), at
-        // most `margin` from the sample's own, within `rect`.
-        let m = self.margin;
-        let span = |c: usize, s: f32, lo: usize, hi: usize| {
-            let t = s - 0.5 - r;
-            let a = if t > 0.0 { floor(t) } else { 0 };
-            let b = floor(s - 0.5 + r) + 1;
-            let a = a.max(c.saturating_sub(m)).max(lo);
-            (a, b.min(c + m + 1).min(hi).max(a))
-        };
-        let (x0, x1) = span(x, sx, rect.x0, rect.x1);
-        let (y0, y1) = span(y, sy, rect.y0, rect.y1);
-        let n = x1 - x0;
-        let fixed = |v: f32| (v.clamp(-MAX, MAX) * UNIT) as i64;
+        let rect = sums.rect;
+        // The pixels reached (columns x0.., rows y0..) and their weights along each axis:
+        // from the table away from the image's edges, else from the filter.
+        let (mut wx, mut wy) = ([0i32; 8], [0i32; 8]);
+        let (x0, y0, nx, ny);
+        if self.step_taps != 0
+            && self.interior(x, self.inv_x.len())
+            && self.interior(y, self.inv_y.len())
+        {
+            let step = |o: f32| {
+                let i = ((o * STEPS as f32 + 12_582_912.0).to_bits() & 0x7f_ffff) as usize;
+                &self.steps[(i - (1 << 22)).min(STEPS)]
+            };
+            let ((fx, tx), (fy, ty)) = (step(offset[0]), step(offset[1]));
+            (wx, wy) = (*tx, *ty);
+            (x0, y0) = (x.wrapping_add_signed(*fx), y.wrapping_add_signed(*fy));
+            (nx, ny) = (self.step_taps, self.step_taps);
+        } else {
+            // The pixels q with |q + 0.5 − s| < r (one more at worst, of weight 0), at most
+            // `margin` from the sample's own, within `rect`.
+            let r = self.radius;
+            let (sx, sy) = (x as f32 + offset[0], y as f32 + offset[1]);
+            let m = self.margin;
+            let span = |c: usize, s: f32, lo: usize, hi: usize| {
+                let t = s - 0.5 - r;
+                let a = if t > 0.0 { floor(t) + 1 } else { 0 };
+                let b = floor(s - 0.5 + r) + 1;
+                let a = a.max(c.saturating_sub(m)).max(lo);
+                (a, b.min(c + m + 1).min(hi).max(a))
+            };
+            let (xa, xb) = span(x, sx, rect.x0, rect.x1);
+            let (ya, yb) = span(y, sy, rect.y0, rect.y1);
+            let weight_x = |p: usize| axis_weight(self.g(p as f32 + 0.5 - sx) * self.inv_x[p]);
+            let weight_y = |q: usize| axis_weight(self.g(q as f32 + 0.5 - sy) * self.inv_y[q]);
+            if xb - xa > 8 || yb - ya > 8 {
+                // Filters reaching more than eight pixels per axis: cell by cell, in 128 bits.
+                let lf = [l.r, l.g, l.b].map(|v| (v.clamp(-MAX, MAX) * UNIT).round() as i128);
+                for q in ya..yb {
+                    let row = (q - rect.y0) * rect.width() - rect.x0;
+                    let wq = weight_y(q) as i128;
+                    for p in xa..xb {
+                        let w = weight_x(p) as i128 * wq;
+                        for (sum, &v) in wide[row + p].iter_mut().zip(&lf) {
+                            *sum += v * w;
+                        }
+                    }
+                }
+                return;
+            }
+            for (k, w) in wx.iter_mut().enumerate().take(xb - xa) {
+                *w = weight_x(xa + k);
+            }
+            for (k, w) in wy.iter_mut().enumerate().take(yb - ya) {
+                *w = weight_y(ya + k);
+            }
+            (x0, y0, nx, ny) = (xa, ya, xb - xa, yb - ya);
+        }
+        let fixed = |v: f32| (v.clamp(-MAX, MAX) * UNIT).round() as i64;
         let lf = [fixed(l.r), fixed(l.g), fixed(l.b)];
-        let small = self.small_weights && lf.iter().all(|v| v.unsigned_abs() < 1 << 29);
-        let width = rect.width();
-        if n > TAPS || !small {
-            // Wide filters, large values: weights computed cell by cell, 128-bit sums.
-            for q in y0..y1 {
-                let wy = self.g(q as f32 + 0.5 - sy) * self.inv_y[q];
-                let row = (q - rect.y0) * width - rect.x0;
-                for p in x0..x1 {
-                    let wx = self.g(p as f32 + 0.5 - sx) * self.inv_x[p] * UNIT;
-                    let w = round(wx * wy) as i128;
-                    let sum = &mut wide[row + p];
-                    for c in 0..3 {
-                        sum[c] += lf[c] as i128 * w;
+        let (x0, y0) = (x0 - rect.x0, y0 - rect.y0);
+        if self.small_weights && lf.iter().all(|v| v.unsigned_abs() < 1 << 25) {
+            let lf = lf.map(|v| v as i32);
+            if nx <= 4 {
+                sums.add_rows::<4>((x0, y0), (&wx, &wy[..ny]), lf);
+            } else {
+                sums.add_rows::<8>((x0, y0), (&wx, &wy[..ny]), lf);
+            }
+        } else {
+            // Large values: 128-bit sums.
+            for (j, &wq) in wy[..ny].iter().enumerate() {
+                let row = (y0 + j) * rect.width() + x0;
+                for (k, &wp) in wx[..nx].iter().enumerate() {
+                    let w = wp as i128 * wq as i128;
+                    for (sum, &v) in wide[row + k].iter_mut().zip(&lf) {
+                        *sum += v as i128 * w;
                     }
                 }
             }
-            return;
         }
-        let mut wx = [0f32; TAPS];
-        for k in 0..n {
-            let p = x0 + k;
-            wx[k] = self.g(p as f32 + 0.5 - sx) * self.inv_x[p] * UNIT;
-        }
-        for q in y0..y1 {
-            let wy = self.g(q as f32 + 0.5 - sy) * self.inv_y[q];
-            let row = (q - rect.y0) * width + x0 - rect.x0;
-            let cells = &mut quick[row..row + n];
-            for k in 0..n {
-                let w = round(wx[k] * wy);
-                let sum = &mut cells[k];
-                sum[0] += lf[0] * w;
-                sum[1] += lf[1] * w;
-                sum[2] += lf[2] * w;
+    }
+}
+
+/// The 64-bit splat sums of a window (see [`Splat::add`]): one plane per channel, each row
+/// padded by eight columns; and the samples added since they were last moved to the 128-bit
+/// sums.
+#[derive(Clone, Debug, Default)]
+pub struct SplatSums {
+    rect: Window,
+    stride: usize,
+    quick: Vec<i64>,
+    pending: u32,
+}
+
+impl SplatSums {
+    /// Empty sums for the pixels of `rect` (reusing the memory of earlier windows).
+    pub fn reset(&mut self, rect: Window) {
+        self.rect = rect;
+        self.stride = rect.width() + 8;
+        self.quick.clear();
+        self.quick.resize(3 * self.plane(), 0);
+        self.pending = 0;
+    }
+
+    /// Adds the shares of a sample of value `lf` (fixed point) with weights `wx` along x
+    /// (columns `x0..`, 0 past the last pixel reached) and `wy` along y (rows `y0..`) to the
+    /// 64-bit sums, `N` columns at a time (the rows' padding takes those past the window).
+    #[inline(always)]
+    fn add_rows<const N: usize>(
+        &mut self,
+        (x0, y0): (usize, usize),
+        (wx, wy): (&[i32; 8], &[i32]),
+        lf: [i32; 3],
+    ) {
+        let plane = self.plane();
+        for (j, &wq) in wy.iter().enumerate() {
+            let mut w = [0i32; N];
+            for k in 0..N {
+                w[k] = wx[k] * wq;
+            }
+            let at = (y0 + j) * self.stride + x0;
+            for (c, &v) in lf.iter().enumerate() {
+                let cells: &mut [i64; N] = (&mut self.quick[c * plane + at..c * plane + at + N])
+                    .try_into()
+                    .expect("rows are padded by eight columns");
+                for k in 0..N {
+                    cells[k] += v as i64 * w[k] as i64;
+                }
             }
         }
     }
 
-    /// Moves the 64-bit sums of [`Splat::add`] into the 128-bit ones (and clears them).
-    pub fn flush(wide: &mut [[i128; 3]], quick: &mut [[i64; 3]]) {
-        for (w, q) in wide.iter_mut().zip(quick.iter_mut()) {
-            for c in 0..3 {
-                w[c] += q[c] as i128;
+    /// Values per channel plane.
+    fn plane(&self) -> usize {
+        self.rect.height() * self.stride
+    }
+
+    /// Moves the 64-bit sums into `wide` (the 128-bit sums of the window's pixels, row-major)
+    /// and clears them.
+    pub fn flush(&mut self, wide: &mut [[i128; 3]]) {
+        let (width, plane) = (self.rect.width(), self.plane());
+        for (r, row) in wide.chunks_exact_mut(width).enumerate() {
+            for (k, sum) in row.iter_mut().enumerate() {
+                for (c, s) in sum.iter_mut().enumerate() {
+                    let q = &mut self.quick[c * plane + r * self.stride + k];
+                    *s += *q as i128;
+                    *q = 0;
+                }
             }
-            *q = [0; 3];
+        }
+        self.pending = 0;
+    }
+}
+
+/// [`Splat::add`] as a kernel.
+struct AddKernel<'a, I> {
+    splat: &'a Splat,
+    sums: &'a mut SplatSums,
+    wide: &'a mut [[i128; 3]],
+    samples: I,
+}
+
+impl<I: Iterator<Item = ((usize, usize), [f32; 2], Rgb)>> crate::simd::Kernel for AddKernel<'_, I> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<S: crate::simd::Isa>(self, _: S) {
+        let AddKernel {
+            splat,
+            sums,
+            wide,
+            samples,
+        } = self;
+        for (pixel, offset, l) in samples {
+            splat.add_one(sums, wide, pixel, offset, l);
+            sums.pending += 1;
+            if sums.pending == FLUSH_EVERY {
+                sums.flush(wide);
+            }
         }
     }
+}
+
+/// Fixed point of values: units of 2⁻²⁰.
+const UNIT: f32 = (1u32 << 20) as f32;
+
+/// Units of the weights along one axis: 2⁻¹⁴ (a share's weight, the product of two, in units
+/// of 2⁻²⁸, is below 2³⁰ when each is below 2).
+pub const AXIS_UNIT: f32 = (1u32 << 14) as f32;
+
+/// A sample's weight along one axis in units of 2⁻¹⁴ (|w| < 256), rounded to the nearest
+/// integer (ties to even) through the bits of `w · 2¹⁴ + 1.5·2²³`, without the branches of a
+/// saturating conversion. (The rounding errors, a function of the sample's position, average
+/// out over it; with samples at the pixel centres, each weight is off by 2⁻¹⁵ at most.)
+#[inline(always)]
+fn axis_weight(w: f32) -> i32 {
+    ((w * AXIS_UNIT + 12_582_912.0).to_bits() & 0x7f_ffff) as i32 - (1 << 22)
 }
 
 /// ⌊x⌋ for 0 ≤ x < 2²¹, or ⌊x⌋ − 1 when x is an integer: x − ½ rounded to the nearest
@@ -243,72 +459,69 @@ fn floor(x: f32) -> usize {
     (((x - 0.5 + 12_582_912.0).to_bits() & 0x7f_ffff) as usize).wrapping_sub(1 << 22)
 }
 
-/// `x` rounded to the nearest integer (ties to even), for |x| < 2⁵¹: through the bits of
-/// `x + 1.5·2⁵²` in double precision, without the branches of a saturating conversion.
-#[inline(always)]
-fn round(x: f32) -> i64 {
-    const MAGIC: f64 = 6_755_399_441_055_744.0;
-    ((x as f64 + MAGIC).to_bits() as i64).wrapping_sub(MAGIC.to_bits() as i64)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::film::from_fixed;
 
+    /// Splats `samples` over a `rect` window: the 128-bit sums.
+    fn splat_all(
+        s: &Splat,
+        rect: Window,
+        samples: &[((usize, usize), [f32; 2], Rgb)],
+    ) -> Vec<[i128; 3]> {
+        let mut sums = SplatSums::default();
+        sums.reset(rect);
+        let mut wide = vec![[0i128; 3]; rect.pixels()];
+        s.add(&mut sums, &mut wide, samples.iter().copied());
+        sums.flush(&mut wide);
+        wide
+    }
+
     /// A constant image comes out constant, borders included: the expected weight of every
-    /// pixel is 1 (uniform samples), exactly 1 with samples at the centres.
+    /// pixel is 1 (uniform samples), exactly 1 with samples at the centres (up to the
+    /// rounding of the weights). On a small image, where every sample is near an edge, and a
+    /// larger one, whose middle samples read their weights from the table.
     #[test]
     fn a_constant_image_stays_constant_to_its_borders() {
-        let (w, h) = (9, 7);
+        for (w, h) in [(9, 7), (31, 26)] {
+            constant_image(w, h);
+        }
+    }
+
+    fn constant_image(w: usize, h: usize) {
         let rect = Window::full(w, h);
+        let one = Rgb::new(1.0, 1.0, 1.0);
         for name in crate::filter::FILTER_NAMES {
             let filter = Filter::by_name(name).unwrap();
             let Some(s) = Splat::new(filter, w, h, 1) else {
                 assert_eq!(name, "box");
                 continue;
             };
-            let mut buf = vec![[0i128; 3]; w * h];
-            let mut quick = vec![[0i64; 3]; w * h];
-            for (x, y) in rect.points() {
-                s.add(
-                    (&mut buf, &mut quick),
-                    rect,
-                    (x, y),
-                    [0.5, 0.5],
-                    Rgb::new(1.0, 1.0, 1.0),
-                );
-            }
-            Splat::flush(&mut buf, &mut quick);
-            for v in &buf {
-                assert!(
-                    (from_fixed(v[0]) - 1.0).abs() < 1e-5,
-                    "{name}: {}",
-                    from_fixed(v[0])
-                );
+            let centres: Vec<_> = rect.points().map(|p| (p, [0.5, 0.5], one)).collect();
+            // Each weight along an axis is rounded to 2⁻¹⁴: the sums of the 2m + 1 weights
+            // along each axis may be off by (2m + 1)·2⁻¹⁵ each.
+            let taps = (2 * s.margin() + 1) as f64;
+            let bound = 2.0 * taps * 2f64.powi(-15) * 1.01;
+            for v in splat_all(&s, rect, &centres) {
+                let v = from_fixed(v[0]);
+                assert!((v - 1.0).abs() < bound, "{name}: {v}");
             }
             // Uniform samples: 1 in expectation. A 32 × 32 grid of midpoints in every pixel
-            // (the midpoint rule converges to the integral the normaliser holds).
+            // (the midpoint rule converges to the integral the normaliser holds), more
+            // samples than a flush takes.
             let s = Splat::new(filter, w, h, 64).unwrap();
-            let mut buf = vec![[0i128; 3]; w * h];
-            let mut quick = vec![[0i64; 3]; w * h];
-            let k = 32;
-            for (x, y) in rect.points() {
-                for i in 0..k * k {
-                    let o = [(i % k) as f32 + 0.5, (i / k) as f32 + 0.5].map(|v| v / k as f32);
-                    s.add(
-                        (&mut buf, &mut quick),
-                        rect,
-                        (x, y),
-                        o,
-                        Rgb::new(1.0, 1.0, 1.0),
-                    );
-                    if i % FLUSH_EVERY as usize == FLUSH_EVERY as usize - 1 {
-                        Splat::flush(&mut buf, &mut quick);
-                    }
-                }
-            }
-            for (i, v) in buf.iter().enumerate() {
+            let k = if w > 16 { 16 } else { 32 };
+            let grid: Vec<_> = rect
+                .points()
+                .flat_map(|p| {
+                    (0..k * k).map(move |i| {
+                        let o = [(i % k) as f32 + 0.5, (i / k) as f32 + 0.5];
+                        (p, o.map(|v| v / k as f32), one)
+                    })
+                })
+                .collect();
+            for (i, v) in splat_all(&s, rect, &grid).iter().enumerate() {
                 let mean = from_fixed(v[0]) / (k * k) as f64;
                 assert!((mean - 1.0).abs() < 2e-3, "{name}: pixel {i}: {mean}");
             }
@@ -316,7 +529,8 @@ mod tests {
     }
 
     /// The table and the filter agree, and a sample reaches exactly the pixels within the
-    /// radius of its position.
+    /// radius of its position, with the same shares whatever way they are summed (64 or 128
+    /// bits, four or eight columns at a time).
     #[test]
     fn weights_follow_the_filter_within_its_radius() {
         let f = Filter::Gaussian { stddev: 0.5 };
@@ -327,31 +541,22 @@ mod tests {
             assert!((s.g(d) as f64 - f.eval_1d(d as f64)).abs() < 1e-6, "{d}");
         }
         let rect = Window::full(64, 64);
-        let mut buf = vec![[0i128; 3]; 64 * 64];
-        let mut quick = vec![[0i64; 3]; 64 * 64];
-        s.add(
-            (&mut buf, &mut quick),
+        let at = |l: f32| splat_all(&s, rect, &[((30, 30), [0.1, 0.9], Rgb::new(l, 0.0, 0.0))]);
+        let (small, large) = (at(1.0), at(128.0));
+        // Five columns (an integer edge, whose extra pixel has weight 0): eight at a time.
+        let edge = splat_all(&s, rect, &[((30, 30), [0.5, 0.5], Rgb::new(1.0, 0.0, 0.0))]);
+        let large_edge = splat_all(
+            &s,
             rect,
-            (30, 30),
-            [0.1, 0.9],
-            Rgb::new(1.0, 0.0, 0.0),
+            &[((30, 30), [0.5, 0.5], Rgb::new(128.0, 0.0, 0.0))],
         );
-        // A value of 32 or more goes straight to the wide sums, and adds the same.
-        let mut wide = vec![[0i128; 3]; 64 * 64];
-        s.add(
-            (&mut wide, &mut quick),
-            rect,
-            (30, 30),
-            [0.1, 0.9],
-            Rgb::new(128.0, 0.0, 0.0),
-        );
-        Splat::flush(&mut buf, &mut quick);
         for (x, y) in rect.points() {
             let i = y * 64 + x;
-            assert_eq!(wide[i][0], 128 * buf[i][0], "({x}, {y})");
+            assert_eq!(large[i][0], 128 * small[i][0], "({x}, {y})");
+            assert_eq!(large_edge[i][0], 128 * edge[i][0], "({x}, {y})");
             let (dx, dy) = (x as f32 + 0.5 - 30.1, y as f32 + 0.5 - 30.9);
             let reached = dx.abs() < 2.0 && dy.abs() < 2.0;
-            assert_eq!(buf[y * 64 + x][0] != 0, reached, "({x}, {y})");
+            assert_eq!(small[i][0] != 0, reached, "({x}, {y})");
         }
     }
 }
