@@ -59,7 +59,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "NAME")]
     pub sampler: Option<String>,
     /// The reconstruction filter: box (the candela language's default), tent, gaussian (Mitsuba's
-    /// default), mitchell, catmullrom, lanczos.
+    /// default), mitchell, catmullrom, lanczos; samples are splatted to the pixels the filter
+    /// reaches, as Mitsuba does (importance-sampled instead with --aov).
     #[arg(long, value_name = "NAME", value_parser = clap::builder::PossibleValuesParser::new(candela_render::filter::FILTER_NAMES))]
     pub filter: Option<String>,
     /// The integrator.

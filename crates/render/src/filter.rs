@@ -1,13 +1,15 @@
-//! Pixel reconstruction filters, applied by filter importance sampling (pbrt-v4, §8.8).
+//! Pixel reconstruction filters, and their filter importance sampling (pbrt-v4, §8.8).
 //!
 //! Every filter is separable, `f(x, y) = g(x) g(y)`, with `g` one of Mitsuba 3's 1D filters
-//! (same names, parameters and defaults). A pixel's sample position is drawn from the filter's
-//! distribution around the pixel centre instead of uniformly over the pixel, and the sample keeps
-//! a weight: 1 for non-negative filters, `sign · ∫|g| / ∫g` per axis for filters with negative
-//! lobes (Mitchell, Catmull-Rom, Lanczos). No sample is splatted to other pixels, so each sample
-//! still belongs to exactly one pixel and renders stay deterministic and independent of tiling.
-//! The expected value of a pixel is the normalised filter's convolution of the image, which is
-//! also what Mitsuba's splatting film converges to.
+//! (same names, parameters and defaults). Renders splat their samples with it
+//! ([`crate::splat`]), except those with output variables, which sample it instead: a pixel's
+//! sample position is drawn from the filter's distribution around the pixel centre instead of
+//! uniformly over the pixel, and the sample keeps a weight: 1 for non-negative filters,
+//! `sign · ∫|g| / ∫g` per axis for filters with negative lobes (Mitchell, Catmull-Rom,
+//! Lanczos). Each sample then belongs to exactly one pixel, whose noise is its own (what a
+//! denoiser expects), at about π times the variance of splatting for the default Gaussian. The
+//! expected value of a pixel is the normalised filter's convolution of the image either way,
+//! which is also what Mitsuba's splatting film converges to.
 //!
 //! The box is the identity on the sampler's pixel sample (one sample per pixel still goes through
 //! the pixel centre); the tent is inverted in closed form; the others are tabulated as a

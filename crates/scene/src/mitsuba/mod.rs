@@ -32,8 +32,8 @@
 //!   interpolated one, Mitsuba on the side of the interpolated normal (only silhouettes differ);
 //! - a sphere whose `to_world` scales non-uniformly stays round, as in Mitsuba, but its uv follow
 //!   the rotation of the polar decomposition instead of Mitsuba's inverse `to_world`;
-//! - reconstruction filters are importance-sampled (no splatting; Gaussian when the film names
-//!   none, as in Mitsuba), crop windows are ignored (warnings);
+//! - crop windows are ignored (warnings); the reconstruction filter is the Gaussian when the
+//!   film names none, as in Mitsuba;
 //! - spectra (`<spectrum>` values, λ:value lists, files and the `uniform`, `blackbody`,
 //!   `regular`, `irregular`, `d65`, `srgb` plugins; see `spectra.rs`) are used as they are by
 //!   spectral renders (`--spectral`, as Mitsuba's spectral variants) and converted to RGB as
@@ -50,11 +50,12 @@
 //! - JPEG textures are decoded by `zune-jpeg`, Mitsuba uses libjpeg: texels differ by up to
 //!   ~2 % of full scale (rounding, chroma upsampling), seen as ≲1 % differences where such a
 //!   texture dominates;
-//! - reconstruction filters are importance-sampled (each sample stays in its pixel; its
-//!   expectation is the normalised filter's convolution, checked against analytic edges), Mitsuba
-//!   splats samples and divides by the weights' sum: images agree in the mean, negative-lobed
-//!   filters differ by up to ~1 % of the peak at sharp edges and are noisier in candela; Mitsuba's
-//!   border pixels see no samples outside the film, candela's do.
+//! - reconstruction filters wider than the box splat samples, as Mitsuba's film does, but
+//!   divide by the weight each pixel expects rather than by the sum of the weights it received
+//!   (an unbiased estimate of the same normalised convolution, exact in any order; see
+//!   `candela_render::splat`); with output variables they are importance-sampled instead (each
+//!   sample stays in its pixel, whose noise is then its own), where negative-lobed filters are
+//!   noisier and border pixels see samples outside the film.
 
 mod bsdfs;
 mod emitters;
