@@ -10,8 +10,9 @@
 //! uninterrupted render. [`render`] is one pass of every sample.
 //!
 //! With a filter wider than the box (and no output variables), samples are splatted to the
-//! pixels around them ([`crate::splat`]): each tile then also sums the shares its samples give
-//! the pixels beyond its edges, which the film adds, and a window is rendered with a border of
+//! pixels around them ([`crate::splat`]): each tile adds the shares of its samples, its own
+//! pixels' and its neighbours', to the pass's sums of the window (exact integers, so in any
+//! order), which the film takes when the pass ends; and a window is rendered with a border of
 //! the pixels whose samples reach it (their own sums stay out of the film), so that a window
 //! gets the same bits as the same pixels of the whole frame.
 //!
@@ -33,6 +34,7 @@ use crate::splat::{Splat, SplatSums};
 use crate::stats::RayStats;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 /// Edge of the square tiles, in pixels.
 pub const TILE: usize = 16;
@@ -127,15 +129,9 @@ pub fn render_pass(
 }
 
 /// A finished tile: its pixels inside the film's window (none for a tile of the border that
-/// splatting renders around a window), their fixed-point sums and counts, the radiance its
-/// samples splat (the pixels it reaches and their sums), and its counters.
-type TileSums = (
-    Option<Window>,
-    Vec<i128>,
-    Vec<u32>,
-    Option<(Window, Vec<[i128; 3]>)>,
-    RayStats,
-);
+/// splatting renders around a window), their fixed-point sums (the radiance's are 0 when it is
+/// splatted) and counts, and its counters.
+type TileSums = (Option<Window>, Vec<i128>, Vec<u32>, RayStats);
 
 /// The pixels `w` and `o` share, if any.
 fn intersection(w: Window, o: Window) -> Option<Window> {
@@ -202,6 +198,13 @@ pub fn render_pass_or_cancel(
     } else {
         settings.filter
     });
+    // The radiance the pass splats into the window's pixels: each tile adds its sums there
+    // as it ends (exact integers, so in any order), and the film takes them if the pass ends.
+    let splats = Mutex::new(if splat.is_some() {
+        vec![[0i128; 3]; win.pixels()]
+    } else {
+        Vec::new()
+    });
     let tiles: Option<Vec<TileSums>> = (0..tiles_x * tiles_y)
         .into_par_iter()
         // Each worker's runs (their samplers are large) serve tile after tile.
@@ -241,12 +244,24 @@ pub fn render_pass_or_cancel(
                 runs.trace(&mut radiance, &mut stats);
                 if splat.is_some() {
                     runs.quick.flush(&mut radiance);
+                    if let Some(part) = intersection(reach, win) {
+                        let mut all = splats.lock().unwrap_or_else(|e| e.into_inner());
+                        for y in part.y0..part.y1 {
+                            for x in part.x0..part.x1 {
+                                let s = &radiance[(y - reach.y0) * reach.width() + x - reach.x0];
+                                let to = &mut all[(y - win.y0) * win.width() + x - win.x0];
+                                for c in 0..3 {
+                                    to[c] += s[c];
+                                }
+                            }
+                        }
+                    }
                     for _ in 0..n_own {
                         sums.extend_from_slice(&[0; 3]);
                         counts.push(last.saturating_sub(first));
                     }
                     progress(n_own as u64 * (last - first) as u64);
-                    return Some((own, sums, counts, Some((reach, radiance)), stats));
+                    return Some((own, sums, counts, stats));
                 }
                 let sampler = runs.sampler();
                 for ((x, y), sum) in rect.points().zip(&radiance) {
@@ -265,19 +280,19 @@ pub fn render_pass_or_cancel(
                     counts.push(last.saturating_sub(first));
                 }
                 progress(rect.pixels() as u64 * (last - first) as u64);
-                Some((Some(rect), sums, counts, None, stats))
+                Some((Some(rect), sums, counts, stats))
             },
         )
         .collect();
     let mut stats = RayStats::default();
-    for (own, sums, counts, splats, s) in tiles? {
+    for (own, sums, counts, s) in tiles? {
         stats += s;
         if let Some(own) = own {
             film.add_block(own, &sums, &counts);
         }
-        if let Some((reach, radiance)) = splats {
-            film.add_radiance(reach, &radiance);
-        }
+    }
+    if splat.is_some() {
+        film.add_radiance(win, &splats.into_inner().unwrap_or_else(|e| e.into_inner()));
     }
     Some(stats)
 }

@@ -7,8 +7,10 @@
 //! and the normaliser `C(c) = ∫ f(c − s) ds` over the image is the weight that pixel can expect
 //! per sample of each pixel (the integral over the image clips the filter at its edges, as
 //! Mitsuba's division by the sum of the weights does). The film then divides the sums by the
-//! pixel's own sample count, as for every other filter. The estimate is unbiased, and converges
-//! to the normalised filter's convolution of the image, the same image as the filter importance
+//! pixel's own sample count, as for every other filter. The estimate is unbiased (up to the
+//! rounding of positions and weights below, which moves the expected image by less than 10⁻⁵),
+//! and converges to the normalised filter's convolution of the image, the same image as the
+//! filter importance
 //! sampling of [`crate::filter::FilterSampler`], with about `(∫f)² / ∫f²` times less variance per
 //! pixel (π for Mitsuba's default Gaussian, σ = 0.5: each sample reaches about 16 pixels),
 //! at the price of noise that neighbouring pixels share. When a pixel takes a single sample it
@@ -69,7 +71,9 @@ pub const STEPS: usize = 256;
 
 impl Splat {
     /// Splatting for `filter` on a `width × height` image whose pixels take `spp` samples each
-    /// (one: through the centre), or `None` for the box (each sample stays in its pixel).
+    /// (one: through the centre), or `None` for the box (each sample stays in its pixel) and
+    /// for a filter whose weights would leave the fixed point's range (none of the valid ones
+    /// does; it would be importance-sampled).
     pub fn new(filter: Filter, width: usize, height: usize, spp: u32) -> Option<Self> {
         if filter == Filter::Box || !filter.is_valid() {
             return None;
