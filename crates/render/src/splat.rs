@@ -33,7 +33,7 @@ use crate::filter::Filter;
 /// Intervals of the table of `g` over `[0, radius]`.
 pub const TABLE: usize = 2048;
 
-/// The most samples [`Splat::add`] may add before a [`Splat::flush`].
+/// The most samples [`Splat::add`] may add before a [`SplatSums::flush`].
 pub const FLUSH_EVERY: u32 = 256;
 
 /// The widest margin splatting supports (a Gaussian of σ = 16 reaches 64 pixels).
