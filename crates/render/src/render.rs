@@ -410,10 +410,8 @@ impl<'a> Runs<'a> {
                     self.screen[j] = screen_point((w, h), (x, y), offset);
                     self.offsets[j] = offset;
                 } else {
-                    let (offset, weight) = self.filter.sample(sampler.pixel_sample(i));
-                    self.rays[j] =
-                        ray_through(self.scene, (w, h), (x, y), offset, || sampler.next_2d());
-                    (self.weights[j], self.offsets[j]) = (weight, offset);
+                    (self.rays[j], self.weights[j], self.offsets[j]) =
+                        camera_ray(self.scene, (w, h), (x, y), i, (sampler, self.filter));
                 }
                 // The sample's wavelengths: the number after the camera's.
                 self.lambdas[j] = if spectral {
@@ -496,9 +494,9 @@ impl<'a> Runs<'a> {
     }
 }
 
-/// The camera ray of sample `i` of pixel (x, y) of a `w × h` image and the sample's filter
-/// weight: the first numbers of the sample place it in the pixel (through the filter's
-/// distribution), the next ones on the lens.
+/// The camera ray of sample `i` of pixel (x, y) of a `w × h` image, the sample's filter
+/// weight and its position in the pixel (from the corner): the first numbers of the sample
+/// place it in the pixel (through the filter's distribution), the next ones on the lens.
 #[inline]
 fn camera_ray(
     scene: &Scene,
@@ -506,10 +504,10 @@ fn camera_ray(
     (x, y): (usize, usize),
     i: u32,
     (sampler, filter): (&mut Sampler, &FilterSampler),
-) -> (Ray, f32) {
+) -> (Ray, f32, [f32; 2]) {
     let (offset, weight) = filter.sample(sampler.pixel_sample(i));
     let ray = ray_through(scene, size, (x, y), offset, || sampler.next_2d());
-    (ray, weight)
+    (ray, weight, offset)
 }
 
 /// The camera ray through the point of the filter's square `u` of pixel (x, y), with its
@@ -601,7 +599,7 @@ fn aov_pixel(
         );
     for i in first..last {
         // The other variables are plain means over the same rays.
-        let (ray, w) = camera_ray(scene, size, (x, y), i, (&mut *sampler, filter));
+        let (ray, w, _) = camera_ray(scene, size, (x, y), i, (&mut *sampler, filter));
         aov_sample(scene, &ray, settings.aovs, &mut vals[..n], stats);
         for at in [emission, emission_aa].into_iter().flatten() {
             for v in &mut vals[at..at + 3] {
@@ -652,9 +650,10 @@ mod tests {
         }
     }
 
-    /// An integrator that returns NaN on the left half of the image.
-    struct Poison;
-    impl Integrator for Poison {
+    /// An integrator that returns one value on the left half of the image and another on the
+    /// right half (this camera's y axis is the image's x axis, leftwards).
+    struct Halves(Rgb, Rgb);
+    impl Integrator for Halves {
         fn radiance(
             &self,
             _: &Scene,
@@ -663,13 +662,12 @@ mod tests {
             _: &mut Sampler,
             _: &mut RayStats,
         ) -> SampledSpectrum {
-            if ray.d.y > 0.0 {
-                Rgb::new(f32::NAN, 0.0, f32::INFINITY).into()
-            } else {
-                SampledSpectrum::ONE
-            }
+            if ray.d.y > 0.0 { self.0 } else { self.1 }.into()
         }
     }
+
+    /// NaN and infinities on the left half of the image.
+    const POISON: Halves = Halves(Rgb::new(f32::NAN, 0.0, f32::INFINITY), Rgb::WHITE);
 
     fn scene() -> Scene {
         let mut b = SceneBuilder::new();
@@ -750,7 +748,7 @@ mod tests {
             spp: 2,
             ..Default::default()
         };
-        let out = render(&s, &Poison, &settings, &|_| {});
+        let out = render(&s, &POISON, &settings, &|_| {});
         assert!(out.image.pixels().iter().all(|p| p.is_finite()));
         assert_eq!(out.image.get(0, 0), Rgb::BLACK);
         assert_eq!(out.image.get(7, 0), Rgb::WHITE);
@@ -818,24 +816,7 @@ mod tests {
     /// every column, the first and last ones (where the filter is clipped) included.
     #[test]
     fn splatted_edges_are_the_filtered_image() {
-        struct Edge;
-        impl Integrator for Edge {
-            fn radiance(
-                &self,
-                _: &Scene,
-                ray: &Ray,
-                _: &mut Wavelengths,
-                _: &mut Sampler,
-                _: &mut RayStats,
-            ) -> SampledSpectrum {
-                // (This camera's y axis is the image's x axis, leftwards.)
-                if ray.d.y > 0.0 {
-                    SampledSpectrum::ONE
-                } else {
-                    SampledSpectrum::ZERO
-                }
-            }
-        }
+        let edge = Halves(Rgb::WHITE, Rgb::BLACK);
         let s = scene();
         let (w, h) = (12, 6);
         for filter in [
@@ -853,7 +834,7 @@ mod tests {
                 filter,
                 ..Default::default()
             };
-            let out = render(&s, &Edge, &settings, &|_| {});
+            let out = render(&s, &edge, &settings, &|_| {});
             let integral = |c: f64, a: f64, b: f64| {
                 let n = 20000;
                 let dh = (b - a) / n as f64;

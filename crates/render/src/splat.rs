@@ -264,10 +264,7 @@ impl Splat {
             && self.interior(x, self.inv_x.len())
             && self.interior(y, self.inv_y.len())
         {
-            let step = |o: f32| {
-                let i = ((o * STEPS as f32 + 12_582_912.0).to_bits() & 0x7f_ffff) as usize;
-                &self.steps[(i - (1 << 22)).min(STEPS)]
-            };
+            let step = |o: f32| &self.steps[(round(o * STEPS as f32) as usize).min(STEPS)];
             let ((fx, tx), (fy, ty)) = (step(offset[0]), step(offset[1]));
             (wx, wy) = (*tx, *ty);
             (x0, y0) = (x.wrapping_add_signed(*fx), y.wrapping_add_signed(*fy));
@@ -444,23 +441,28 @@ const UNIT: f32 = (1u32 << 20) as f32;
 /// of 2⁻²⁸, is below 2³⁰ when each is below 2).
 pub const AXIS_UNIT: f32 = (1u32 << 14) as f32;
 
-/// A sample's weight along one axis in units of 2⁻¹⁴ (|w| < 256), rounded to the nearest
-/// integer (ties to even) through the bits of `w · 2¹⁴ + 1.5·2²³`, without the branches of a
-/// saturating conversion. (The rounding errors, a function of the sample's position, average
-/// out over it; with samples at the pixel centres, each weight is off by 2⁻¹⁵ at most.)
+/// `x` rounded to the nearest integer (ties to even), for |x| < 2²²: read from the bits of
+/// `x + 1.5·2²³`, where floats are the integers, without the branches of a saturating
+/// conversion.
 #[inline(always)]
-fn axis_weight(w: f32) -> i32 {
-    ((w * AXIS_UNIT + 12_582_912.0).to_bits() & 0x7f_ffff) as i32 - (1 << 22)
+fn round(x: f32) -> i32 {
+    ((x + 12_582_912.0).to_bits() & 0x7f_ffff) as i32 - (1 << 22)
 }
 
-/// ⌊x⌋ for 0 ≤ x < 2²¹, or ⌊x⌋ − 1 when x is an integer: x − ½ rounded to the nearest
-/// integer, read from the bits of x − ½ + 1.5·2²³ (where floats are the integers), without
-/// the branches of a saturating conversion. Either serves [`Splat::g`]'s interpolation (the
-/// fraction is then 1: the next knot's value) and the spans of [`Splat::add`] (a pixel more,
-/// of weight 0).
+/// A sample's weight along one axis in units of 2⁻¹⁴ (|w| < 256), rounded to the nearest
+/// integer. (The rounding errors, a function of the sample's position, average out over it;
+/// with samples at the pixel centres, each weight is off by 2⁻¹⁵ at most.)
+#[inline(always)]
+fn axis_weight(w: f32) -> i32 {
+    round(w * AXIS_UNIT)
+}
+
+/// ⌊x⌋ for 0 ≤ x < 2²¹, or ⌊x⌋ − 1 when x is an integer (x − ½ rounded). Either serves
+/// [`Splat::g`]'s interpolation (the fraction is then 1: the next knot's value) and the spans
+/// of [`Splat::add`] (a pixel more, of weight 0).
 #[inline(always)]
 fn floor(x: f32) -> usize {
-    (((x - 0.5 + 12_582_912.0).to_bits() & 0x7f_ffff) as usize).wrapping_sub(1 << 22)
+    round(x - 0.5) as usize
 }
 
 #[cfg(test)]
