@@ -45,7 +45,7 @@ use super::Bvh;
 use crate::accel::closest;
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
-use crate::math::{RayBatch, Vec3, BATCH};
+use crate::math::{RayBatch, BATCH};
 use crate::shape::ShearedRay;
 use crate::simd::{SimdLevel, Wide, WideKernel};
 use crate::stats::RayStats;
@@ -57,8 +57,8 @@ const PACKET_MIN: u32 = 6;
 /// ([`ShearedRay::axes`]) and, per axis, the box plane (index into a node's `b`) crossed first.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Coherence {
-    k: [usize; 3],
-    near: [usize; 3],
+    k: [u8; 3],
+    near: [u8; 3],
 }
 
 impl Coherence {
@@ -86,33 +86,30 @@ impl Coherence {
         if active.count_ones() < PACKET_MIN {
             return out;
         }
-        // Straight from the lanes (this runs for every batch of a deep tree): the sign of the
-        // reciprocal, as the single-ray box test sees it (1/-0 = -∞ < 0, 1/NaN is not), and
-        // the axes of `ShearedRay::axes` (the largest |d| and its sign).
+        // Straight from the lanes (this runs for every batch of a deep tree), every lane at
+        // once without branches (the compiler vectorises it; active or not, a lane's key is
+        // only read when it is active): the sign of the reciprocal, as the single-ray box
+        // test sees it (1/-0 = -∞ < 0, 1/NaN is not), and the axes of `ShearedRay::axes` (the
+        // largest |d| and its sign).
         let mut keys = [0u32; BATCH];
-        let mut m = active;
-        while m != 0 {
-            let i = m.trailing_zeros() as usize;
-            m &= m - 1;
-            keys[i] = key(rays, i);
+        for (i, k) in keys.iter_mut().enumerate() {
+            *k = key(rays, i);
         }
         let mut rest = active;
         while rest.count_ones() >= PACKET_MIN {
             let first = rest.trailing_zeros() as usize;
             let k0 = keys[first];
-            let mut group = 0u32;
-            let mut m = rest;
-            while m != 0 {
-                let i = m.trailing_zeros() as usize;
-                m &= m - 1;
-                group |= ((keys[i] == k0) as u32) << i;
+            let mut same = 0u32;
+            for (i, &k) in keys.iter().enumerate() {
+                same |= ((k == k0) as u32) << i;
             }
+            let group = same & rest;
             rest &= !group;
             if group.count_ones() >= PACKET_MIN {
                 let near = [0, 1, 2].map(|a| if k0 >> (2 - a) & 1 == 1 { a + 3 } else { a });
                 out.groups[out.len] = (
                     Self {
-                        k: ShearedRay::axes(&rays.ray(first)),
+                        k: ShearedRay::axes(&rays.ray(first)).map(|a| a as u8),
                         near,
                     },
                     group,
@@ -124,18 +121,26 @@ impl Coherence {
     }
 }
 
-/// Lane `i`'s coherence key: its watertight-test axis and sign, and its direction signs.
+/// Lane `i`'s coherence key: its watertight-test axis and sign, and its direction signs
+/// ([`crate::math::Vec3::max_dimension`]'s choice, with the same comparisons, made by selects).
 #[inline(always)]
 fn key(rays: &RayBatch, i: usize) -> u32 {
-    let v = Vec3::new(rays.d[0][i], rays.d[1][i], rays.d[2][i]);
-    let d = [v.x, v.y, v.z];
-    let kz = v.max_dimension();
-    let negative = |x: f32| (x.is_sign_negative() && !x.is_nan()) as u32;
-    (kz as u32) << 4
-        | ((d[kz] < 0.0) as u32) << 3
-        | negative(d[0]) << 2
-        | negative(d[1]) << 1
-        | negative(d[2])
+    let [x, y, z] = [rays.d[0][i], rays.d[1][i], rays.d[2][i]];
+    let [ax, ay, az] = [x.abs(), y.abs(), z.abs()];
+    let negative = |v: f32| (v.to_bits() >> 31) & (v == v) as u32;
+    let below = |v: f32| (v < 0.0) as u32;
+    let (kz, neg_k) = if ax > ay {
+        if ax > az {
+            (0, below(x))
+        } else {
+            (2, below(z))
+        }
+    } else if ay > az {
+        (1, below(y))
+    } else {
+        (2, below(z))
+    };
+    kz << 4 | neg_k << 3 | negative(x) << 2 | negative(y) << 1 | negative(z)
 }
 
 /// The coherent groups of a batch's lanes ([`Coherence::groups`]).
@@ -318,9 +323,9 @@ impl<Q: PacketQuery> WideKernel for Packet<'_, Q> {
         let d = [w.load(&r.d[0]), w.load(&r.d[1]), w.load(&r.d[2])];
         let one = w.splat(1.0);
         let inv = [w.div(one, d[0]), w.div(one, d[1]), w.div(one, d[2])];
-        let near = self.c.near;
+        let near = self.c.near.map(usize::from);
         let far = near.map(|p| (p + 3) % 6);
-        let [kx, ky, kz] = self.c.k;
+        let [kx, ky, kz] = self.c.k.map(usize::from);
         // The sheared ray of the watertight test: the same quotients as `TriRay::new`.
         let sx = w.div(d[kx], d[kz]);
         let sy = w.div(d[ky], d[kz]);
