@@ -103,9 +103,7 @@ impl Bvh {
             }
             let rest = rays.active & !groups.lanes();
             let single = single_rays(rays, rest);
-            for i in crate::math::lanes(rest) {
-                hits[i] = self.intersect(geometry, &single[i], stats);
-            }
+            self.intersect_lanes(geometry, &single, rest, hits, stats);
             return;
         }
         if !self.flat_prims.is_empty() {
@@ -167,12 +165,7 @@ impl Bvh {
             }
             let rest = rays.active & !groups.lanes();
             let single = single_rays(rays, rest);
-            for i in crate::math::lanes(rest) {
-                if self.occluded(geometry, &single[i], stats) {
-                    hit |= 1 << i;
-                }
-            }
-            return hit;
+            return hit | self.occluded_lanes(geometry, &single, rest, stats);
         }
         let mut hit = 0;
         if !self.flat_prims.is_empty() {

@@ -127,7 +127,7 @@ impl Coherence {
 fn key(rays: &RayBatch, i: usize) -> u32 {
     let [x, y, z] = [rays.d[0][i], rays.d[1][i], rays.d[2][i]];
     let [ax, ay, az] = [x.abs(), y.abs(), z.abs()];
-    let negative = |v: f32| (v.to_bits() >> 31) & (v == v) as u32;
+    let negative = |v: f32| (v.to_bits() >> 31) & !v.is_nan() as u32;
     let below = |v: f32| (v < 0.0) as u32;
     let (kz, neg_k) = if ax > ay {
         if ax > az {

@@ -10,7 +10,7 @@ use crate::accel::blocks::{BlockHit, BlockRay};
 use crate::accel::closest;
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
-use crate::math::{Ray, GAMMA3};
+use crate::math::{Ray, BATCH, GAMMA3};
 use crate::shape::ShearedRay;
 use crate::simd::{Isa, F4};
 use crate::stats::RayStats;
@@ -314,6 +314,136 @@ impl Bvh {
                     break;
                 }
             }
+        }
+    }
+}
+
+impl Bvh {
+    /// The closest hits of the rays of `lanes` (of `rays`), into `hits`: [`Bvh::intersect`]
+    /// for each (see [`Bvh::traverse_lanes`]).
+    pub(super) fn intersect_lanes(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray; BATCH],
+        lanes: u32,
+        hits: &mut [Option<Hit>; BATCH],
+        stats: &mut RayStats,
+    ) {
+        let triangles = !self.tris.is_empty();
+        self.traverse_lanes(
+            rays,
+            lanes,
+            |ray| ClosestQuery {
+                geometry,
+                ray: *ray,
+                tri: TriRay::new(ray, triangles),
+                best: None,
+                tests: 0,
+            },
+            |i, q, visited| {
+                hits[i] = q.best;
+                stats.nodes += visited;
+                stats.prim_tests += q.tests;
+            },
+        );
+    }
+
+    /// The lanes of `lanes` whose rays (of `rays`) hit something: [`Bvh::occluded`] for each
+    /// (see [`Bvh::traverse_lanes`]).
+    pub(super) fn occluded_lanes(
+        &self,
+        geometry: &Geometry,
+        rays: &[Ray; BATCH],
+        lanes: u32,
+        stats: &mut RayStats,
+    ) -> u32 {
+        let triangles = !self.tris.is_empty();
+        let mut hit = 0;
+        self.traverse_lanes(
+            rays,
+            lanes,
+            |ray| AnyQuery {
+                geometry,
+                ray: *ray,
+                tri: TriRay::new(ray, triangles),
+                tests: 0,
+            },
+            |i, q, visited| {
+                hit |= ((visited & FOUND != 0) as u32) << i;
+                stats.nodes += visited & !FOUND;
+                stats.prim_tests += q.tests;
+            },
+        );
+        hit
+    }
+
+    /// [`Bvh::traverse`] for the rays of `lanes` one after the other, with the stack taken and
+    /// the instruction set chosen once for them all rather than once per ray. `make` makes a
+    /// ray's query; `done` receives the lane, its query and the visit count (with [`FOUND`]
+    /// when the query stopped).
+    #[inline(always)]
+    fn traverse_lanes<Q: Query>(
+        &self,
+        rays: &[Ray; BATCH],
+        lanes: u32,
+        make: impl Fn(&Ray) -> Q,
+        mut done: impl FnMut(usize, Q, u64),
+    ) {
+        if self.root.meta != 0 || !self.flat.is_empty() {
+            for i in crate::math::lanes(lanes) {
+                let mut q = make(&rays[i]);
+                let visited = self.traverse(&rays[i], &mut q);
+                done(i, q, visited);
+            }
+            return;
+        }
+        STACK_SPACE.with(|space| match space.try_borrow_mut() {
+            Ok(mut stack) => crate::simd::run(Lanes {
+                bvh: self,
+                rays,
+                lanes,
+                make,
+                done,
+                stack: &mut stack,
+                query: std::marker::PhantomData,
+            }),
+            // Only reached if a leaf test traced rays through a BVH itself.
+            Err(_) => crate::simd::run(Lanes {
+                bvh: self,
+                rays,
+                lanes,
+                make,
+                done,
+                stack: &mut [(Ref::EMPTY, 0.0); STACK],
+                query: std::marker::PhantomData,
+            }),
+        })
+    }
+}
+
+/// [`Bvh::traverse_lanes`] as a kernel for [`crate::simd::run`].
+struct Lanes<'a, Q, M, D> {
+    bvh: &'a Bvh,
+    rays: &'a [Ray; BATCH],
+    lanes: u32,
+    make: M,
+    done: D,
+    stack: &'a mut [(Ref, f32); STACK],
+    query: std::marker::PhantomData<fn() -> Q>,
+}
+
+impl<Q: Query, M: Fn(&Ray) -> Q, D: FnMut(usize, Q, u64)> crate::simd::Kernel
+    for Lanes<'_, Q, M, D>
+{
+    type Output = ();
+
+    #[inline(always)]
+    fn run<I: Isa>(mut self, isa: I) {
+        for i in crate::math::lanes(self.lanes) {
+            let ray = &self.rays[i];
+            let mut q = (self.make)(ray);
+            let visited = self.bvh.traverse_from(ray, &mut q, self.stack, isa);
+            (self.done)(i, q, visited);
         }
     }
 }
