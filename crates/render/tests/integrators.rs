@@ -151,6 +151,35 @@ fn lossless_materials_vanish_in_a_white_furnace() {
     }
 }
 
+/// A white furnace whose paths bounce between objects: two white Lambert spheres almost
+/// touching, under a uniform environment of radiance 1 and no other light, are invisible too.
+/// The path tracer samples such a sky at the first vertex only (deeper, BSDF sampling alone
+/// finds it, with the full MIS weight), so this checks that the deeper vertices' escapes are
+/// weighed as their vertex sampled (with a weight of ½ there the mean was 0.986).
+#[test]
+fn interreflecting_white_spheres_vanish_under_the_sky_alone() {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(Material::diffuse(Texture::Uniform(Rgb::WHITE)));
+    // Two spheres of radius 2 side by side, a larger one behind them.
+    for (x, y, r) in [(3.0, -2.03, 2.0), (3.0, 2.03, 2.0), (9.0, 0.0, 4.0)] {
+        let to_world =
+            Transform::translation(Vec3::new(x, y, 0.0)) * Transform::scaling(Vec3::new(r, r, r));
+        b.add_shape(Shape::Sphere(Sphere::new(to_world)), m, None);
+    }
+    b.add_light(Light::Environment(Environment::new(
+        Texture::Uniform(Rgb::WHITE),
+        Transform::IDENTITY,
+    )));
+    b.camera(Camera::perspective(1.0, 4.0 / 3.0, Transform::IDENTITY));
+    let scene = b.build(AccelKind::Bvh);
+    let img = image(&scene, &Path::default(), 256);
+    let mean = img.mean()[0];
+    assert!((mean - 1.0).abs() < 0.005, "mean {mean}");
+    for p in img.pixels() {
+        assert!((p.r - 1.0).abs() < 0.1, "pixel {p:?}");
+    }
+}
+
 /// Without a depth limit the roulette still ends every path, even where nothing is absorbed:
 /// the camera inside a closed sphere of albedo 1 keeps β = 1 at every bounce, which a survival
 /// probability min(β·Πη², 1) would never stop. Capped at 0.95 when the length is unlimited,

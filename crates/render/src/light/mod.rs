@@ -148,6 +148,17 @@ impl Light {
         matches!(self, Light::Environment(_) | Light::Hemisphere(..))
     }
 
+    /// True for lights at infinity whose radiance varies little enough over directions that
+    /// BSDF sampling finds them as well as a light sample could: a constant environment and a
+    /// hemisphere light (light selection gives them no importance; see `select`).
+    pub fn is_smooth_at_infinity(&self) -> bool {
+        match self {
+            Light::Environment(e) => !e.is_importance_sampled(),
+            Light::Hemisphere(..) => true,
+            _ => false,
+        }
+    }
+
     /// The local model's illumination at `p` from a point, spot or distant light (`None` for
     /// other lights, or outside a spot's cone), in the lanes of `lambda` (the intensities'
     /// colours upsampled as emitters in spectral mode).
@@ -345,12 +356,7 @@ impl Light {
     /// `sp`: a constant environment or a hemisphere light, seen from a BSDF that only reflects.
     #[inline]
     fn cosine_sampled(&self, sp: &ShadingPoint) -> bool {
-        sp.reflect_only
-            && match self {
-                Light::Environment(e) => !e.is_importance_sampled(),
-                Light::Hemisphere(..) => true,
-                _ => false,
-            }
+        sp.reflect_only && self.is_smooth_at_infinity()
     }
 
     /// The cosine-weighted direction about the normal of `sp`, for lights sampled so there.

@@ -14,7 +14,8 @@
 //!   their full weight, and no shadow ray is spent on them. (Measured on the bench's meshes
 //!   under a rectangle light and a constant sky: RMSE 0.0081 with the sky's share at π L,
 //!   0.0069 at a quarter of that, 0.0064 at 0, for fewer rays.) Alone in a scene they are
-//!   still sampled, as every single light is;
+//!   still sampled, as every single light is (by the path tracer at the first vertex only:
+//!   see `integrator::path`);
 //! - an emissive shape: its power per side over π (L·A, comparable with the irradiances above)
 //!   over the squared distance to its centre (at least its bounding sphere's squared radius),
 //!   and 0 where it cannot reach the point: a one-sided planar light seen from behind, a light

@@ -128,6 +128,20 @@ fn roulette_cap(unbounded: bool) -> f32 {
     }
 }
 
+/// True when the vertex at `depth` (0 for the camera's hit) samples a light. A scene lit by a
+/// single light at infinity that BSDF sampling finds as well as a light sample could (a
+/// constant sky, a hemisphere light: [`Light::is_smooth_at_infinity`]) samples it at the
+/// first vertex only: deeper, the shadow ray costs more than the variance it saves, and MIS
+/// gives the BSDF samples that escape their full weight there (the previous vertex's choice
+/// probability is 0). On the bench's meshes under the sky alone (4 seeds): 0.83× the time for
+/// 1.13× the variance, so 1.07× the efficiency; without light samples at any vertex the time
+/// was 0.67× but the variance 1.53×. Where the sky is not alone, light selection already gives
+/// it no share (see `light::select`).
+#[inline(always)]
+fn samples_lights(scene: &Scene, depth: u32) -> bool {
+    depth == 0 || !matches!(&scene.lights[..], [l] if l.is_smooth_at_infinity())
+}
+
 /// The most lights a vertex samples all of (see [`every_light`]).
 const MAX_SHADOWS: usize = 8;
 
@@ -197,7 +211,7 @@ impl Path {
                     if le.is_black() {
                         continue;
                     }
-                    let w = if st.prev_delta {
+                    let w = if st.prev_delta || !samples_lights(scene, st.depth - 1) {
                         1.0
                     } else {
                         let pick = scene.light_selector.pmf(lights, &st.prev, i as usize);
@@ -512,6 +526,9 @@ impl Path {
         sp: &ShadingPoint,
         mut u: [f32; 2],
     ) -> LaneLight<'s> {
+        if !samples_lights(scene, st.depth) {
+            return LaneLight::None;
+        }
         let lights = &scene.lights[..];
         let Some((pick, pick_pdf, u0)) = scene.light_selector.pick(lights, sp, u[0]) else {
             return LaneLight::None;
@@ -573,6 +590,9 @@ impl Path {
     ) -> Option<(crate::light::LightSample, f32)> {
         let lights = &scene.lights[..];
         let mut u = sampler.next_2d();
+        if !samples_lights(scene, st.depth) {
+            return None;
+        }
         let (pick, pick_pdf, u0) = scene.light_selector.pick(lights, sp, u[0])?;
         u[0] = u0;
         lights[pick]
