@@ -31,7 +31,13 @@
 //! lines load at once rather than one after another as the box test, then the child
 //! references, reach them: this matters for incoherent rays, which miss the caches. The
 //! children a shadow ray pushes are not: it often stops before it comes back to them (camera
-//! rays' any-hit queries 1.05× faster, random rays' 0.95×).
+//! rays' any-hit queries 1.05× faster, random rays' 0.95×). A batch's rays that go one by one
+//! share one stack and one choice of instruction set (`Bvh::traverse_lanes`). Two of them
+//! interleaved step by step, so that one's loads overlap the other's tests, made random rays
+//! 1.28× faster but a pixel's first-bounce rays 0.88× and a meshes frame 0.89×: in a frame the
+//! rays are not waiting on memory so much as on their instruction count (a first-bounce ray of
+//! the bench's meshes, about five nodes and five triangle tests, takes about 1100 instructions
+//! here against 500 in Embree's `rtcIntersect1`, 135 ns against 114 ns).
 //! A block of four triangles is tested at once by the same arithmetic as
 //! [`crate::shape::intersect_triangle`], lane by lane, so that `t` and the barycentrics are
 //! bit-identical to [`crate::shape::Mesh::intersect`]. The ray's `tmax` is one ULP above the
