@@ -542,7 +542,7 @@ impl Path {
                     AreaShape::Parallelogram(q) => {
                         return LaneLight::Rect {
                             q,
-                            inv_area: 1.0 / a.area,
+                            inv_area: a.inv_area(),
                             radiance: &e.radiance,
                             two_sided: e.two_sided,
                             u,
