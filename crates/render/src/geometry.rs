@@ -345,6 +345,17 @@ impl Geometry {
                     let g = p.geometry(hit.uv[0], hit.uv[1]);
                     return surface_interaction(ray, hit, g, obj.props, Some(p.frame()));
                 }
+                // Boxes (the blocks of a Cornell box), likewise.
+                (Shape::Cube(c), _) => {
+                    let g = c.geometry(ray, hit.t, hit.sub);
+                    return surface_interaction(
+                        ray,
+                        hit,
+                        g,
+                        obj.props,
+                        Some(c.face_frame(hit.sub)),
+                    );
+                }
                 // Spheres (without texture coordinates), likewise.
                 (Shape::Sphere(s), false) => {
                     let g = s.geometry_without_uv(ray, hit.t);
