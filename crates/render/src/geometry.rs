@@ -330,7 +330,7 @@ impl Geometry {
     /// coordinates cost something to compute (spheres) leave them at zero otherwise.
     #[inline(always)]
     pub fn interaction_with(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfaceInteraction {
-        // A parallelogram (walls, floors, area lights) is resolved in the caller: the
+        // A parallelogram (walls, floors, area lights) or a box is resolved in the caller: the
         // interaction is not returned through memory from a call (written by the callee in
         // other pieces than the caller reads back), and no call is made.
         // (Only bounded objects have these shapes: a triangle's record is not read.)
@@ -524,8 +524,8 @@ mod tests {
     }
     use crate::shape::{Cube, Parallelogram};
 
-    /// A parallelogram's hit resolved in the caller is the general path's interaction, bit for
-    /// bit; other shapes still take the general path.
+    /// A parallelogram's or a box's hit resolved in the caller is the general path's
+    /// interaction, bit for bit; other shapes still take the general path.
     #[test]
     fn parallelogram_interactions_inline_match_the_general_path() {
         let q = Parallelogram::new(

@@ -22,6 +22,14 @@ fn settings(spp: u32) -> RenderSettings {
     }
 }
 
+/// A uniform environment of radiance 1, the furnaces' only light.
+fn add_white_sky(b: &mut SceneBuilder) {
+    b.add_light(Light::Environment(Environment::new(
+        Texture::Uniform(Rgb::WHITE),
+        Transform::IDENTITY,
+    )));
+}
+
 fn image(scene: &Scene, integrator: &dyn Integrator, spp: u32) -> Image {
     render(scene, integrator, &settings(spp), &|_| {}).image
 }
@@ -124,10 +132,7 @@ fn lossless_materials_vanish_in_a_white_furnace() {
             m,
             None,
         );
-        b.add_light(Light::Environment(Environment::new(
-            Texture::Uniform(Rgb::WHITE),
-            Transform::IDENTITY,
-        )));
+        add_white_sky(&mut b);
         b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
         let scene = b.build(AccelKind::Bvh);
         let path = Path {
@@ -166,10 +171,7 @@ fn interreflecting_white_spheres_vanish_under_the_sky_alone() {
             Transform::translation(Vec3::new(x, y, 0.0)) * Transform::scaling(Vec3::new(r, r, r));
         b.add_shape(Shape::Sphere(Sphere::new(to_world)), m, None);
     }
-    b.add_light(Light::Environment(Environment::new(
-        Texture::Uniform(Rgb::WHITE),
-        Transform::IDENTITY,
-    )));
+    add_white_sky(&mut b);
     b.camera(Camera::perspective(1.0, 4.0 / 3.0, Transform::IDENTITY));
     let scene = b.build(AccelKind::Bvh);
     let img = image(&scene, &Path::default(), 256);
@@ -238,10 +240,7 @@ fn roulette_inside_glass_keeps_the_variance_low() {
         m,
         None,
     );
-    b.add_light(Light::Environment(Environment::new(
-        Texture::Uniform(Rgb::WHITE),
-        Transform::IDENTITY,
-    )));
+    add_white_sky(&mut b);
     b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
     let scene = b.build(AccelKind::Bvh);
     let path = Path {
@@ -302,10 +301,7 @@ fn glossy_models_conserve_energy_in_a_white_furnace() {
             m,
             None,
         );
-        b.add_light(Light::Environment(Environment::new(
-            Texture::Uniform(Rgb::WHITE),
-            Transform::IDENTITY,
-        )));
+        add_white_sky(&mut b);
         b.camera(Camera::perspective(2.0, 4.0 / 3.0, Transform::IDENTITY));
         let scene = b.build(AccelKind::Bvh);
         let img = image(&scene, &Path::default(), 64);

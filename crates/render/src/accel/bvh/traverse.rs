@@ -378,7 +378,9 @@ impl Bvh {
     }
 
     /// [`Bvh::traverse`] for the rays of `lanes` one after the other, with the stack taken and
-    /// the instruction set chosen once for them all rather than once per ray. `make` makes a
+    /// the instruction set chosen once for them all rather than once per ray. (Single rays
+    /// keep [`Bvh::traverse`]: through this, one lane at a time, camera rays on the
+    /// 1M-triangle bench were 0.93× as fast.) `make` makes a
     /// ray's query; `done` receives the lane, its query and the visit count (with [`FOUND`]
     /// when the query stopped).
     #[inline(always)]
