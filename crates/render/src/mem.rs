@@ -3,6 +3,9 @@
 //! arrays that rays read at random (BVH nodes, triangle blocks): with 4 KiB pages, tens of
 //! megabytes read at random miss the TLB on nearly every access, and each miss is a page walk.
 //!
+//! [`Stack`]: a fixed-capacity stack whose slots are not cleared before use (a traversal's,
+//! made for every ray).
+//!
 //! Arrays of at least [`HUGE`] bytes are allocated aligned to 2 MiB and advised before they
 //! are first written (the pages then come as huge pages if the kernel has them); smaller ones,
 //! and every array on other systems, are ordinary allocations. Only the memory changes, never
@@ -14,6 +17,8 @@
 // length and read as a slice of initialised values
 // and freed with the layout it was allocated with; `madvise` (libc, which std links on Linux)
 // only gives the kernel advice about pages of that allocation and never changes their contents.
+// A `Stack` reads only the slots below its length, each written by `push` before (the slots
+// from its length up are never read).
 #![allow(unsafe_code)]
 
 use std::alloc::{alloc, dealloc, handle_alloc_error, Layout};
@@ -192,5 +197,90 @@ mod tests {
             }
         }
         assert!(HugeSlice::<[u8; 3]>::default().is_empty());
+    }
+}
+
+/// A stack of at most `N` values of `T` whose slots are not initialised when it is made: a
+/// BVH traversal makes one for every ray, and clearing its couple of kilobytes would cost
+/// more than its first nodes. (A thread-local stack kept across rays cost about fifty
+/// instructions a ray to borrow.)
+pub(crate) struct Stack<T: Copy, const N: usize> {
+    slots: [MaybeUninit<T>; N],
+    len: usize,
+}
+
+impl<T: Copy, const N: usize> Stack<T, N> {
+    /// An empty stack.
+    #[inline(always)]
+    pub(crate) fn new() -> Self {
+        Self {
+            slots: [const { MaybeUninit::uninit() }; N],
+            len: 0,
+        }
+    }
+
+    /// Pushes `x`; panics when the stack is full.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, x: T) {
+        self.slots[self.len].write(x);
+        self.len += 1;
+    }
+
+    /// The top value, removed; `None` when empty.
+    #[inline(always)]
+    pub(crate) fn pop(&mut self) -> Option<T> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: the slots below the length were written by `push`.
+        Some(unsafe { self.slots[self.len].assume_init() })
+    }
+
+    /// The number of values.
+    #[inline(always)]
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// The values from position `from` (from the bottom) to the top, top last.
+    #[inline(always)]
+    pub(crate) fn above_mut(&mut self, from: usize) -> &mut [T] {
+        let part = &mut self.slots[from.min(self.len)..self.len];
+        // SAFETY: the slots below the length were written by `push`, and `MaybeUninit<T>` has
+        // the layout of `T`.
+        unsafe { &mut *(part as *mut [MaybeUninit<T>] as *mut [T]) }
+    }
+}
+
+#[cfg(test)]
+mod stack_tests {
+    use super::Stack;
+
+    #[test]
+    fn a_stack_gives_back_what_was_pushed_last_first() {
+        let mut s = Stack::<(u32, f32), 8>::new();
+        assert_eq!(s.pop(), None);
+        for i in 0..5 {
+            s.push((i, i as f32));
+        }
+        assert_eq!(s.len(), 5);
+        assert_eq!(s.above_mut(3), &mut [(3, 3.0), (4, 4.0)]);
+        s.above_mut(3).swap(0, 1);
+        assert_eq!(s.pop(), Some((3, 3.0)));
+        assert_eq!(s.pop(), Some((4, 4.0)));
+        assert_eq!(s.above_mut(7), &mut []);
+        assert_eq!(s.len(), 3);
+        while s.pop().is_some() {}
+        assert_eq!(s.len(), 0);
+    }
+
+    #[test]
+    #[should_panic]
+    fn pushing_on_a_full_stack_panics() {
+        let mut s = Stack::<u8, 2>::new();
+        for i in 0..3 {
+            s.push(i);
+        }
     }
 }

@@ -11,6 +11,7 @@ use crate::accel::closest;
 use crate::geometry::Geometry;
 use crate::interaction::Hit;
 use crate::math::{Ray, BATCH, GAMMA3};
+use crate::mem::Stack;
 use crate::shape::ShearedRay;
 use crate::simd::{Isa, F4};
 use crate::stats::RayStats;
@@ -21,30 +22,38 @@ pub(super) const FAR_SCALE: f32 = 1.0 + 2.0 * GAMMA3;
 impl Bvh {
     /// The closest hit.
     pub fn intersect(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> Option<Hit> {
-        let mut q = ClosestQuery {
-            geometry,
-            ray: *ray,
-            tri: TriRay::new(ray, !self.tris.is_empty()),
-            best: None,
-            tests: 0,
-        };
-        let visited = self.traverse(ray, &mut q);
+        let triangles = !self.tris.is_empty();
+        let (best, visited, tests) = self.traverse_one(
+            ray,
+            |ray| ClosestQuery {
+                geometry,
+                ray: *ray,
+                tri: TriRay::new(ray, triangles),
+                best: None,
+                tests: 0,
+            },
+            |q, visited| (q.best, visited, q.tests),
+        );
         stats.nodes += visited;
-        stats.prim_tests += q.tests;
-        q.best
+        stats.prim_tests += tests;
+        best
     }
 
     /// True when any primitive is hit.
     pub fn occluded(&self, geometry: &Geometry, ray: &Ray, stats: &mut RayStats) -> bool {
-        let mut q = AnyQuery {
-            geometry,
-            ray: *ray,
-            tri: TriRay::new(ray, !self.tris.is_empty()),
-            tests: 0,
-        };
-        let visited = self.traverse(ray, &mut q);
+        let triangles = !self.tris.is_empty();
+        let (visited, tests) = self.traverse_one(
+            ray,
+            |ray| AnyQuery {
+                geometry,
+                ray: *ray,
+                tri: TriRay::new(ray, triangles),
+                tests: 0,
+            },
+            |q, visited| (visited, q.tests),
+        );
         stats.nodes += visited & !FOUND;
-        stats.prim_tests += q.tests;
+        stats.prim_tests += tests;
         visited & FOUND != 0
     }
 
@@ -167,52 +176,52 @@ impl Bvh {
         }
     }
 
-    /// Visits the leaves whose boxes the ray crosses, nearest child first. Returns the number
-    /// of nodes visited, with [`FOUND`] set when `q` stopped the traversal.
+    /// Visits the leaves whose boxes the ray crosses, nearest child first, with the query
+    /// `make` makes (inside the kernel compiled for the instruction set chosen, where its
+    /// setup stays in registers); `done` receives the query and the number of nodes visited,
+    /// with [`FOUND`] set when the query stopped the traversal.
     #[inline(always)]
-    fn traverse<Q: Query>(&self, ray: &Ray, q: &mut Q) -> u64 {
+    fn traverse_one<Q: Query, R>(
+        &self,
+        ray: &Ray,
+        make: impl FnOnce(&Ray) -> Q,
+        done: impl FnOnce(Q, u64) -> R,
+    ) -> R {
+        if self.root.meta != 0 || !self.flat.is_empty() {
+            let mut q = make(ray);
+            let visited = self.traverse_small(&mut q);
+            return done(q, visited);
+        }
+        crate::simd::run(One {
+            bvh: self,
+            ray,
+            make,
+            done,
+        })
+    }
+
+    /// The traversal of a BVH whose root is a leaf, or whose leaves are all the root's
+    /// children (a small scene: every leaf, without box tests).
+    #[inline(always)]
+    fn traverse_small<Q: Query>(&self, q: &mut Q) -> u64 {
         let cur = self.root;
         if cur.meta != 0 {
             return if q.leaf(self, cur) { FOUND } else { 0 };
         }
-        if !self.flat.is_empty() {
-            // A small scene: every leaf, without box tests.
-            for &r in &self.flat {
-                if q.leaf(self, r) {
-                    return FOUND;
-                }
+        for &r in &self.flat {
+            if q.leaf(self, r) {
+                return FOUND;
             }
-            return 0;
         }
-        STACK_SPACE.with(|space| match space.try_borrow_mut() {
-            Ok(mut stack) => crate::simd::run(Traversal {
-                bvh: self,
-                ray,
-                q,
-                stack: &mut stack,
-            }),
-            // Only reached if a leaf test traced rays through a BVH itself.
-            Err(_) => crate::simd::run(Traversal {
-                bvh: self,
-                ray,
-                q,
-                stack: &mut [(Ref::EMPTY, 0.0); STACK],
-            }),
-        })
+        0
     }
 
-    /// [`Bvh::traverse`] from an inner root, with a stack.
+    /// [`Bvh::traverse_one`] from an inner root.
     #[inline(always)]
-    fn traverse_from<Q: Query, I: Isa>(
-        &self,
-        ray: &Ray,
-        q: &mut Q,
-        stack: &mut [(Ref, f32); STACK],
-        isa: I,
-    ) -> u64 {
+    fn traverse_from<Q: Query, I: Isa>(&self, ray: &Ray, q: &mut Q, isa: I) -> u64 {
         let mut cur = self.root;
         let rb = RayBox::new(ray, isa);
-        let mut sp = 0usize;
+        let mut stack = Stack::<(Ref, f32), STACK>::new();
         let mut visited = 0u64;
         loop {
             if cur.meta == 0 {
@@ -246,8 +255,7 @@ impl Bvh {
                             // (Not prefetched: an any-hit query often stops before it
                             // comes back to them. Camera rays on the 1M-triangle bench:
                             // 1.05x the rays per second; random rays: 0.95x.)
-                            stack[sp] = (r(push), dist[push]);
-                            sp += 1;
+                            stack.push((r(push), dist[push]));
                             near = keep;
                         }
                         cur = r(near);
@@ -261,39 +269,36 @@ impl Bvh {
                         let swap = (dist[c1] < dist[c0]) as usize;
                         let pair = [c0, c1];
                         let (near, far) = (pair[swap], pair[1 - swap]);
-                        stack[sp] = (r(far), dist[far]);
+                        stack.push((r(far), dist[far]));
                         self.prefetch(r(far));
                         cur = r(near);
                         self.prefetch(cur);
-                        sp += 1;
                         continue;
                     }
                     // More: push all, sort the new entries by decreasing distance, continue
                     // with the nearest.
-                    let base = sp;
-                    stack[sp] = (r(c0), dist[c0]);
-                    stack[sp + 1] = (r(c1), dist[c1]);
-                    sp += 2;
+                    let base = stack.len();
+                    stack.push((r(c0), dist[c0]));
+                    stack.push((r(c1), dist[c1]));
                     while mask != 0 {
                         let c = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        stack[sp] = (r(c), dist[c]);
-                        sp += 1;
+                        stack.push((r(c), dist[c]));
                     }
-                    for e in &stack[base..sp] {
+                    let new = stack.above_mut(base);
+                    for e in new.iter() {
                         self.prefetch(e.0);
                     }
-                    for i in base + 1..sp {
-                        let e = stack[i];
+                    for i in 1..new.len() {
+                        let e = new[i];
                         let mut j = i;
-                        while j > base && stack[j - 1].1 < e.1 {
-                            stack[j] = stack[j - 1];
+                        while j > 0 && new[j - 1].1 < e.1 {
+                            new[j] = new[j - 1];
                             j -= 1;
                         }
-                        stack[j] = e;
+                        new[j] = e;
                     }
-                    sp -= 1;
-                    cur = stack[sp].0;
+                    cur = stack.pop().map_or(cur, |e| e.0);
                     continue;
                 }
             } else {
@@ -304,11 +309,9 @@ impl Bvh {
             }
             // Pop the next entry still in reach.
             loop {
-                if sp == 0 {
+                let Some((r, d)) = stack.pop() else {
                     return visited;
-                }
-                sp -= 1;
-                let (r, d) = stack[sp];
+                };
                 if d <= q.tmax() * FAR_SCALE {
                     cur = r;
                     break;
@@ -377,9 +380,9 @@ impl Bvh {
         hit
     }
 
-    /// [`Bvh::traverse`] for the rays of `lanes` one after the other, with the stack taken and
-    /// the instruction set chosen once for them all rather than once per ray. (Single rays
-    /// keep [`Bvh::traverse`]: through this, one lane at a time, camera rays on the
+    /// [`Bvh::traverse_one`] for the rays of `lanes` one after the other, with the
+    /// instruction set chosen once for them all rather than once per ray. (Single rays keep
+    /// [`Bvh::traverse_one`]: through this, one lane at a time, camera rays on the
     /// 1M-triangle bench were 0.93× as fast.) `make` makes a
     /// ray's query; `done` receives the lane, its query and the visit count (with [`FOUND`]
     /// when the query stopped).
@@ -394,31 +397,18 @@ impl Bvh {
         if self.root.meta != 0 || !self.flat.is_empty() {
             for i in crate::math::lanes(lanes) {
                 let mut q = make(&rays[i]);
-                let visited = self.traverse(&rays[i], &mut q);
+                let visited = self.traverse_small(&mut q);
                 done(i, q, visited);
             }
             return;
         }
-        STACK_SPACE.with(|space| match space.try_borrow_mut() {
-            Ok(mut stack) => crate::simd::run(Lanes {
-                bvh: self,
-                rays,
-                lanes,
-                make,
-                done,
-                stack: &mut stack,
-                query: std::marker::PhantomData,
-            }),
-            // Only reached if a leaf test traced rays through a BVH itself.
-            Err(_) => crate::simd::run(Lanes {
-                bvh: self,
-                rays,
-                lanes,
-                make,
-                done,
-                stack: &mut [(Ref::EMPTY, 0.0); STACK],
-                query: std::marker::PhantomData,
-            }),
+        crate::simd::run(Lanes {
+            bvh: self,
+            rays,
+            lanes,
+            make,
+            done,
+            query: std::marker::PhantomData,
         })
     }
 }
@@ -430,7 +420,6 @@ struct Lanes<'a, Q, M, D> {
     lanes: u32,
     make: M,
     done: D,
-    stack: &'a mut [(Ref, f32); STACK],
     query: std::marker::PhantomData<fn() -> Q>,
 }
 
@@ -444,26 +433,30 @@ impl<Q: Query, M: Fn(&Ray) -> Q, D: FnMut(usize, Q, u64)> crate::simd::Kernel
         for i in crate::math::lanes(self.lanes) {
             let ray = &self.rays[i];
             let mut q = (self.make)(ray);
-            let visited = self.bvh.traverse_from(ray, &mut q, self.stack, isa);
+            let visited = self.bvh.traverse_from(ray, &mut q, isa);
             (self.done)(i, q, visited);
         }
     }
 }
 
-/// A traversal from an inner root, as a kernel for [`crate::simd::run`].
-struct Traversal<'a, Q> {
+/// [`Bvh::traverse_one`] as a kernel for [`crate::simd::run`].
+struct One<'a, M, D> {
     bvh: &'a Bvh,
     ray: &'a Ray,
-    q: &'a mut Q,
-    stack: &'a mut [(Ref, f32); STACK],
+    make: M,
+    done: D,
 }
 
-impl<Q: Query> crate::simd::Kernel for Traversal<'_, Q> {
-    type Output = u64;
+impl<Q: Query, R, M: FnOnce(&Ray) -> Q, D: FnOnce(Q, u64) -> R> crate::simd::Kernel
+    for One<'_, M, D>
+{
+    type Output = R;
 
     #[inline(always)]
-    fn run<I: Isa>(self, isa: I) -> u64 {
-        self.bvh.traverse_from(self.ray, self.q, self.stack, isa)
+    fn run<I: Isa>(self, isa: I) -> R {
+        let mut q = (self.make)(self.ray);
+        let visited = self.bvh.traverse_from(self.ray, &mut q, isa);
+        (self.done)(q, visited)
     }
 }
 
@@ -479,14 +472,8 @@ impl<Q: Query> crate::simd::Kernel for Traversal<'_, Q> {
 #[inline(never)]
 fn leaves_are_rarer() {}
 
-/// Set in the visit count returned by [`Bvh::traverse`] when the query stopped it.
+/// Set in the visit count of a traversal when the query stopped it.
 const FOUND: u64 = 1 << 63;
-
-thread_local! {
-    /// The traversal stack of each thread (kept, so that it is not cleared for every ray).
-    static STACK_SPACE: std::cell::RefCell<[(Ref, f32); STACK]> =
-        const { std::cell::RefCell::new([(Ref::EMPTY, 0.0); STACK]) };
-}
 
 /// What a traversal does at leaves.
 trait Query {
