@@ -242,23 +242,18 @@ impl Bvh {
                         continue;
                     }
                     if !Q::ORDERED {
-                        // The nearest next, the others on the stack in any order.
-                        let mut near = c0;
+                        // In sequence (as Embree's any-hit traversal), without comparing
+                        // distances: the last child next, the others on the stack.
+                        // (Not prefetched: an any-hit query often stops before it comes back
+                        // to them. Camera rays on the 1M-triangle bench: 1.05x the rays per
+                        // second; random rays: 0.95x.)
+                        let mut c = c0;
                         while mask != 0 {
-                            let c = mask.trailing_zeros() as usize;
+                            stack.push((r(c), dist[c]));
+                            c = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
-                            let (keep, push) = if dist[c] < dist[near] {
-                                (c, near)
-                            } else {
-                                (near, c)
-                            };
-                            // (Not prefetched: an any-hit query often stops before it
-                            // comes back to them. Camera rays on the 1M-triangle bench:
-                            // 1.05x the rays per second; random rays: 0.95x.)
-                            stack.push((r(push), dist[push]));
-                            near = keep;
                         }
-                        cur = r(near);
+                        cur = r(c);
                         self.prefetch(cur);
                         continue;
                     }
@@ -312,7 +307,8 @@ impl Bvh {
                 let Some((r, d)) = stack.pop() else {
                     return visited;
                 };
-                if d <= q.tmax() * FAR_SCALE {
+                // (An any-hit query's far end never moves: what it pushed is still in reach.)
+                if !Q::ORDERED || d <= q.tmax() * FAR_SCALE {
                     cur = r;
                     break;
                 }
