@@ -169,9 +169,7 @@ impl Bvh {
             let first = r.child as usize;
             let n = (r.meta & COUNT_MASK).div_ceil(4) as usize;
             if let Some(ts) = self.tris.get(first..first + n) {
-                for t in ts {
-                    crate::simd::prefetch(t);
-                }
+                crate::simd::prefetch_all(ts);
             }
         }
     }
