@@ -139,7 +139,9 @@ fn roulette_cap(unbounded: bool) -> f32 {
 /// it no share (see `light::select`).
 #[inline(always)]
 fn samples_lights(scene: &Scene, depth: u32) -> bool {
-    depth == 0 || !matches!(&scene.lights[..], [l] if l.is_smooth_at_infinity())
+    // (The scene's lights first: the same every time, where the depth changes from one path
+    // to the next.)
+    !matches!(&scene.lights[..], [l] if l.is_smooth_at_infinity()) || depth == 0
 }
 
 /// The most lights a vertex samples all of (see [`every_light`]).
