@@ -1,5 +1,5 @@
 //! BVH traversal: the eight child boxes of a node tested at once, nearest child first for
-//! closest hits, any order for shadow rays; leaves of triangles tested four at a time.
+//! closest hits, in sequence for shadow rays; leaves of triangles tested four at a time.
 
 use super::layout::{
     BvhNode, Kind, Ref, Tri4, BOX_LEAF, COUNT_MASK, OBJ_LEAF, QUAD_LEAF, SPHERE_LEAF, STACK,
@@ -174,7 +174,8 @@ impl Bvh {
         }
     }
 
-    /// Visits the leaves whose boxes the ray crosses, nearest child first, with the query
+    /// Visits the leaves whose boxes the ray crosses (nearest child first for closest hits, in
+    /// sequence for any hit), with the query
     /// `make` makes (inside the kernel compiled for the instruction set chosen, where its
     /// setup stays in registers); `done` receives the query and the number of nodes visited,
     /// with [`FOUND`] set when the query stopped the traversal.
