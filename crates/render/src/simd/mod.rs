@@ -145,21 +145,10 @@ fn has_avx512_gfni() -> bool {
 /// results.
 #[inline(always)]
 pub(crate) fn prefetch<T>(x: &T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let p = x as *const T as *const i8;
-        let n = std::mem::size_of::<T>().min(256);
-        let mut off = 0;
-        while off < n {
-            // SAFETY: SSE is always present on x86-64, and a prefetch never faults: the
-            // addresses lie within (or just past) a live object anyway.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
-            off += 64;
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = x;
+    prefetch_bytes(
+        x as *const T as *const i8,
+        std::mem::size_of::<T>().min(256),
+    );
 }
 
 /// Asks for the cache lines of the values of `xs` to be loaded (a hint, no effect on
@@ -167,21 +156,25 @@ pub(crate) fn prefetch<T>(x: &T) {
 /// size to count them, as iterating over a slice of 160-byte values compiles to).
 #[inline(always)]
 pub(crate) fn prefetch_all<T>(xs: &[T]) {
+    prefetch_bytes(xs.as_ptr() as *const i8, std::mem::size_of_val(xs));
+}
+
+/// Prefetches the `n` bytes from `p`, a cache line (64 bytes) at a time.
+#[inline(always)]
+fn prefetch_bytes(p: *const i8, n: usize) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let p = xs.as_ptr() as *const i8;
-        let n = std::mem::size_of_val(xs);
         let mut off = 0;
         while off < n {
-            // SAFETY: SSE is always present on x86-64, and a prefetch never faults: the
-            // addresses lie within the slice.
+            // SAFETY: SSE is always present on x86-64, and a prefetch never faults (the
+            // callers' addresses lie within, or just past, a live object anyway).
             unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
             off += 64;
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = xs;
+    let _ = (p, n);
 }
 
 /// A kernel over sixteen lanes, for [`run_wide`]: its `run` must be `#[inline(always)]` so

@@ -25,13 +25,7 @@ impl Bvh {
         let triangles = !self.tris.is_empty();
         let (best, visited, tests) = self.traverse_one(
             ray,
-            |ray| ClosestQuery {
-                geometry,
-                ray: *ray,
-                tri: TriRay::new(ray, triangles),
-                best: None,
-                tests: 0,
-            },
+            |ray| ClosestQuery::new(geometry, ray, triangles),
             |q, visited| (q.best, visited, q.tests),
         );
         stats.nodes += visited;
@@ -44,12 +38,7 @@ impl Bvh {
         let triangles = !self.tris.is_empty();
         let (visited, tests) = self.traverse_one(
             ray,
-            |ray| AnyQuery {
-                geometry,
-                ray: *ray,
-                tri: TriRay::new(ray, triangles),
-                tests: 0,
-            },
+            |ray| AnyQuery::new(geometry, ray, triangles),
             |q, visited| (visited, q.tests),
         );
         stats.nodes += visited & !FOUND;
@@ -97,13 +86,7 @@ impl Bvh {
         ray: &Ray,
         stats: &mut RayStats,
     ) -> Option<Hit> {
-        let mut q = ClosestQuery {
-            geometry,
-            ray: *ray,
-            tri: TriRay::new(ray, self.leaf_needs_sheared_ray(r)),
-            best: None,
-            tests: 0,
-        };
+        let mut q = ClosestQuery::new(geometry, ray, self.leaf_needs_sheared_ray(r));
         q.leaf(self, r);
         stats.prim_tests += q.tests;
         q.best
@@ -117,12 +100,7 @@ impl Bvh {
         ray: &Ray,
         stats: &mut RayStats,
     ) -> bool {
-        let mut q = AnyQuery {
-            geometry,
-            ray: *ray,
-            tri: TriRay::new(ray, self.leaf_needs_sheared_ray(r)),
-            tests: 0,
-        };
+        let mut q = AnyQuery::new(geometry, ray, self.leaf_needs_sheared_ray(r));
         let hit = q.leaf(self, r);
         stats.prim_tests += q.tests;
         hit
@@ -331,13 +309,7 @@ impl Bvh {
         self.traverse_lanes(
             rays,
             lanes,
-            |ray| ClosestQuery {
-                geometry,
-                ray: *ray,
-                tri: TriRay::new(ray, triangles),
-                best: None,
-                tests: 0,
-            },
+            |ray| ClosestQuery::new(geometry, ray, triangles),
             |i, q, visited| {
                 hits[i] = q.best;
                 stats.nodes += visited;
@@ -360,12 +332,7 @@ impl Bvh {
         self.traverse_lanes(
             rays,
             lanes,
-            |ray| AnyQuery {
-                geometry,
-                ray: *ray,
-                tri: TriRay::new(ray, triangles),
-                tests: 0,
-            },
+            |ray| AnyQuery::new(geometry, ray, triangles),
             |i, q, visited| {
                 hit |= ((visited & FOUND != 0) as u32) << i;
                 stats.nodes += visited & !FOUND;
@@ -489,6 +456,20 @@ struct ClosestQuery<'a> {
     tests: u64,
 }
 
+impl<'a> ClosestQuery<'a> {
+    /// The query of `ray`, with the sheared ray of the triangle test when `triangles`.
+    #[inline(always)]
+    fn new(geometry: &'a Geometry, ray: &Ray, triangles: bool) -> Self {
+        Self {
+            geometry,
+            ray: *ray,
+            tri: TriRay::new(ray, triangles),
+            best: None,
+            tests: 0,
+        }
+    }
+}
+
 impl Query for ClosestQuery<'_> {
     const ORDERED: bool = true;
 
@@ -589,6 +570,19 @@ struct AnyQuery<'a> {
     ray: Ray,
     tri: TriRay,
     tests: u64,
+}
+
+impl<'a> AnyQuery<'a> {
+    /// The query of `ray`, with the sheared ray of the triangle test when `triangles`.
+    #[inline(always)]
+    fn new(geometry: &'a Geometry, ray: &Ray, triangles: bool) -> Self {
+        Self {
+            geometry,
+            ray: *ray,
+            tri: TriRay::new(ray, triangles),
+            tests: 0,
+        }
+    }
 }
 
 impl Query for AnyQuery<'_> {
