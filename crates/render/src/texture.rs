@@ -169,6 +169,10 @@ impl Texture {
             // with one store, which a whole-vector load is forwarded from; `from_rgb` wrote
             // it as two halves (a store-forwarding stall at every lookup).
             (Texture::Uniform(c), Wavelengths::Rgb) => SampledSpectrum::from_rgb_whole(*c),
+            // A measured spectrum (a named metal's index) has its colour ready.
+            (Texture::Spectral { rgb, .. }, Wavelengths::Rgb) => {
+                SampledSpectrum::from_rgb_whole(*rgb)
+            }
             _ => self.spectral_varying(uv, w, role),
         }
     }

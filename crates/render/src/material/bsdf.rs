@@ -133,6 +133,27 @@ impl Bsdf<'_> {
         }
     }
 
+    /// [`Bsdf::eval_local`] and [`Bsdf::pdf_local`] of one pair at once (the microfacet
+    /// models share their terms): the same numbers, bit for bit.
+    #[inline(always)]
+    pub fn eval_pdf_local(&self, o: Vec3, i: Vec3) -> (SampledSpectrum, f32) {
+        // Lambert, the common case, without a call.
+        if let BsdfModel::Lambert(r) = &self.model {
+            return (lambert::eval(*r, o, i), lambert::pdf(o, i));
+        }
+        self.eval_pdf_general(o, i)
+    }
+
+    /// [`Bsdf::eval_pdf_local`] for every model.
+    #[inline(never)]
+    fn eval_pdf_general(&self, o: Vec3, i: Vec3) -> (SampledSpectrum, f32) {
+        match &self.model {
+            BsdfModel::RoughConductor { mf, eta_k, r } => conductor::eval_pdf(mf, *eta_k, *r, o, i),
+            BsdfModel::RoughPlastic(p) => p.eval_pdf(o, i),
+            _ => (self.eval_general(o, i), self.pdf_general(o, i)),
+        }
+    }
+
     /// The density with which [`Bsdf::sample`] returns `wi` (0 for delta components).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let (o, i, _) = self.local(wo, wi);

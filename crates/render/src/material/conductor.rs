@@ -77,6 +77,19 @@ pub fn eval(
     value(c, r, wo, microfacet_lobe(mf, wo, wi))
 }
 
+/// [`eval`] and [`microfacet_pdf`] of one pair at once, sharing the microfacet terms
+/// ([`microfacet_lobe_pdf`]): the same numbers, bit for bit.
+pub fn eval_pdf(
+    mf: &Microfacet,
+    c: Option<(SampledSpectrum, SampledSpectrum)>,
+    r: SampledSpectrum,
+    wo: Vec3,
+    wi: Vec3,
+) -> (SampledSpectrum, f32) {
+    let (lobe, pdf) = microfacet_lobe_pdf(mf, wo, wi);
+    (value(c, r, wo, lobe), pdf)
+}
+
 /// f·cos θi given the lobe at the pair ([`microfacet_lobe`]).
 #[inline(always)]
 fn value(

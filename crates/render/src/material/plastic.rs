@@ -608,6 +608,19 @@ impl RoughPlastic<'_> {
         ps * microfacet_pdf(&self.coating.mf, wo, wi) + (1.0 - ps) * cosine_hemisphere_pdf(wi.z)
     }
 
+    /// [`RoughPlastic::eval`] and [`RoughPlastic::pdf`] of one pair at once, sharing the
+    /// microfacet terms and the transmittance towards `wo`: the same numbers, bit for bit.
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (SampledSpectrum::ZERO, 0.0);
+        }
+        let t_o = self.coating.transmittance(wo.z);
+        let ps = self.specular_probability(t_o);
+        let (lobe, mpdf) = microfacet_lobe_pdf(&self.coating.mf, wo, wi);
+        let pdf = ps * mpdf + (1.0 - ps) * cosine_hemisphere_pdf(wi.z);
+        (self.value(wo, wi, lobe, t_o), pdf)
+    }
+
     /// Picks the coating's lobe or the diffuse base, then weights by the full pdf.
     pub fn sample(&self, wo: Vec3, u1: f32, u2: [f32; 2]) -> Option<LocalSample> {
         if wo.z <= 0.0 {
@@ -636,8 +649,8 @@ mod tests {
     use super::*;
     use crate::material::microfacet::Distribution;
 
-    /// Sampling shares the microfacet terms of `eval` and `pdf`: its density and weight are
-    /// theirs bit for bit (likewise for the rough conductor).
+    /// Sampling, and `eval_pdf`, share the microfacet terms of `eval` and `pdf`: their
+    /// densities and values are theirs bit for bit (likewise for the rough conductor).
     #[test]
     fn samples_carry_eval_and_pdf_exactly() {
         use crate::material::conductor;
@@ -655,6 +668,15 @@ mod tests {
                 let f = |x: f32| (k as f32 * x).fract();
                 let wo = Vec3::new(f(0.37) - 0.5, f(0.71) - 0.5, f(0.13) + 0.05).normalize();
                 let (u1, u2) = (f(0.53), [f(0.29), f(0.83)]);
+                let wi = Vec3::new(f(0.61) - 0.5, f(0.17) - 0.5, f(0.43) - 0.1).normalize();
+                let (fv, pdf) = p.eval_pdf(wo, wi);
+                assert_eq!(fv.0.map(f32::to_bits), p.eval(wo, wi).0.map(f32::to_bits));
+                assert_eq!(pdf.to_bits(), p.pdf(wo, wi).to_bits());
+                let (fv, pdf) = conductor::eval_pdf(&coating.mf, None, ks, wo, wi);
+                let fc = conductor::eval(&coating.mf, None, ks, wo, wi);
+                assert_eq!(fv.0.map(f32::to_bits), fc.0.map(f32::to_bits));
+                let pc = conductor::microfacet_pdf(&coating.mf, wo, wi);
+                assert_eq!(pdf.to_bits(), pc.to_bits());
                 if let Some(s) = p.sample(wo, u1, u2) {
                     assert_eq!(s.pdf.to_bits(), p.pdf(wo, s.wi).to_bits());
                     let w = p.eval(wo, s.wi) / s.pdf;

@@ -168,6 +168,22 @@ fn every_light(scene: &Scene) -> bool {
             .all(|l| delta(l) || matches!(l, Light::Area(..)))
 }
 
+/// The BSDF's value for a light sample's direction `wi` (local, as `wo`) and, where MIS
+/// weighs the sample (not a delta light), its density there: both at once.
+#[inline(always)]
+fn eval_for(
+    bsdf: &crate::material::Bsdf,
+    ls: &crate::light::LightSample,
+    wo: crate::math::Vec3,
+    wi: crate::math::Vec3,
+) -> (SampledSpectrum, f32) {
+    if ls.delta {
+        (bsdf.eval_local(wo, wi), 0.0)
+    } else {
+        bsdf.eval_pdf_local(wo, wi)
+    }
+}
+
 /// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
 /// ray is unblocked (next-event estimation), and whether the path goes on.
 struct VertexOutcome {
@@ -337,12 +353,12 @@ impl Path {
                 let ls = light.sample_from(&scene.geometry, &scene.emissions, &sp, u, &st.lambda);
                 if let Some(ls) = ls {
                     let wi = bsdf.local_wi(ls.wi, flip);
-                    let f = bsdf.eval_local(wo, wi);
+                    let (f, pdf) = eval_for(&bsdf, &ls, wo, wi);
                     if !f.is_black() {
                         let w = if ls.delta {
                             1.0
                         } else {
-                            power_heuristic(1.0, ls.pdf, 1.0, bsdf.pdf_local(wo, wi))
+                            power_heuristic(1.0, ls.pdf, 1.0, pdf)
                         };
                         every[k] = Some((
                             super::local::shadow_ray(&si, ls.wi, ls.target),
@@ -354,13 +370,13 @@ impl Path {
         } else if !bsdf.is_delta() {
             if let Some((ls, pick_pdf)) = self.sample_light(scene, st, &sp, sampler) {
                 let wi = bsdf.local_wi(ls.wi, flip);
-                let f = bsdf.eval_local(wo, wi);
+                let (f, pdf) = eval_for(&bsdf, &ls, wo, wi);
                 if !f.is_black() {
                     let pdf_light = pick_pdf * ls.pdf;
                     let w = if ls.delta {
                         1.0
                     } else {
-                        power_heuristic(1.0, pdf_light, 1.0, bsdf.pdf_local(wo, wi))
+                        power_heuristic(1.0, pdf_light, 1.0, pdf)
                     };
                     shadow = Some((
                         super::local::shadow_ray(&si, ls.wi, ls.target),
