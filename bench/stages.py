@@ -8,7 +8,8 @@ split between Embree (`libembree3`: its ray traversal) and the rest (its JIT-com
 sampling, shading, film). The differences between depths give each stage's cost per sample.
 
 Usage: python bench/stages.py CANDELA_BIN SCENE.xml [SCENE.xml ...] [--spp 64] [--res 512]
-(run by scripts/compare-stages.sh, with the bench's virtual environment).
+(run by scripts/compare-stages.sh, with the bench's virtual environment). A scene sets its path
+depth through `<default name="max_depth" .../>` and its size through `res`, as the bench's do.
 """
 
 import argparse, os, re, subprocess, sys, tempfile, time
