@@ -12,24 +12,16 @@
 # CANDELA_BIN=path skips the build and uses that binary. Meshes and references are made when
 # missing (bench/make-meshes.py, bench/references.sh: Mitsuba at 2048 spp, a few minutes each).
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
+. "$(dirname "$0")/bench-common.sh"
 bench=${CANDELA_BENCH:-$root/../shared/bench}
-venv=${CANDELA_BENCH_VENV:-$HOME/.cache/candela-bench/venv}
-names=(); extra=()
-while [ $# -gt 0 ]; do
-  if [ "$1" = "--" ]; then shift; extra=("$@"); break; fi
-  names+=("$1"); shift
-done
+bench_args "$@"
+names=("${args[@]}")
 [ ${#names[@]} -gt 0 ] || names=(cornell cornell-specular meshes-sky lights-plastic)
-if [ -z "${CANDELA_BIN:-}" ]; then
-  (cd "$root" && cargo build --release -q)
-  CANDELA_BIN=$root/target/release/candela
-fi
+bench_candela
 bash "$root/bench/references.sh" "${names[@]}"
 scenes=()
 for n in "${names[@]}"; do scenes+=("$root/bench/scenes/$n.xml:$root/bench/reference/$n.pfm"); done
 export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
-echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(nproc) cores;" \
-  "AVX-512: $(grep -qw avx512f /proc/cpuinfo && echo yes || echo no)"
+bench_cpu
 "$venv/bin/python" "$bench/efficiency.py" "$CANDELA_BIN" --scenes "${scenes[@]}" --spp 64 --res 512 \
   "${extra[@]}"

@@ -8,19 +8,10 @@
 # CANDELA_BIN=path skips the build and uses that binary. Needs the bench virtual environment
 # (made by scripts/compare-mitsuba.sh) and the meshes (bench/make-meshes.py).
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
-venv=${CANDELA_BENCH_VENV:-$HOME/.cache/candela-bench/venv}
-scenes=(); extra=()
-while [ $# -gt 0 ]; do
-  if [ "$1" = "--" ]; then shift; extra=("$@"); break; fi
-  scenes+=("$1"); shift
-done
+. "$(dirname "$0")/bench-common.sh"
+bench_args "$@"
+scenes=("${args[@]}")
 [ ${#scenes[@]} -gt 0 ] || scenes=("$root"/bench/scenes/*.xml)
-if [ -z "${CANDELA_BIN:-}" ]; then
-  (cd "$root" && cargo build --release -q)
-  CANDELA_BIN=$root/target/release/candela
-fi
-[ -x "$venv/bin/python" ] || { echo "no bench environment at $venv: run scripts/compare-mitsuba.sh once" >&2; exit 1; }
-[ -f "$root/bench/meshes/sky.pfm" ] || python3 "$root/bench/make-meshes.py"
-export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
+bench_candela
+bench_env
 "$venv/bin/python" "$root/bench/stages.py" "$CANDELA_BIN" "${scenes[@]}" "${extra[@]}"

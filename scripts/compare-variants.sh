@@ -9,21 +9,11 @@
 # CANDELA_BIN=path skips the build and uses that binary. Needs the bench virtual environment
 # (made by scripts/compare-mitsuba.sh) and the meshes and sky (bench/make-meshes.py).
 set -euo pipefail
-root=$(cd "$(dirname "$0")/.." && pwd)
-venv=${CANDELA_BENCH_VENV:-$HOME/.cache/candela-bench/venv}
-scenes=(); extra=()
-while [ $# -gt 0 ]; do
-  if [ "$1" = "--" ]; then shift; extra=("$@"); break; fi
-  scenes+=("$1"); shift
-done
+. "$(dirname "$0")/bench-common.sh"
+bench_args "$@"
+scenes=("${args[@]}")
 [ ${#scenes[@]} -gt 0 ] || scenes=("$root"/bench/extra/*.xml)
-if [ -z "${CANDELA_BIN:-}" ]; then
-  (cd "$root" && cargo build --release -q)
-  CANDELA_BIN=$root/target/release/candela
-fi
-[ -x "$venv/bin/python" ] || { echo "no bench environment at $venv: run scripts/compare-mitsuba.sh once" >&2; exit 1; }
-[ -f "$root/bench/meshes/sky.pfm" ] || python3 "$root/bench/make-meshes.py"
-export DRJIT_LIBLLVM_PATH=${DRJIT_LIBLLVM_PATH:-/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1}
-echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(nproc) cores;" \
-  "AVX-512: $(grep -qw avx512f /proc/cpuinfo && echo yes || echo no)"
+bench_candela
+bench_env
+bench_cpu
 "$venv/bin/python" "$root/bench/seed-variance.py" "$CANDELA_BIN" "${scenes[@]}" "${extra[@]}"

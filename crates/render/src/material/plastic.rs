@@ -615,7 +615,13 @@ impl RoughPlastic<'_> {
             return (SampledSpectrum::ZERO, 0.0);
         }
         let t_o = self.coating.transmittance(wo.z);
-        let ps = self.specular_probability(t_o);
+        self.eval_pdf_with(wo, wi, t_o, self.specular_probability(t_o))
+    }
+
+    /// [`RoughPlastic::eval_pdf`] of a pair above the surface, given the transmittance towards
+    /// `wo` and the coating lobe's probability there.
+    #[inline(always)]
+    fn eval_pdf_with(&self, wo: Vec3, wi: Vec3, t_o: f32, ps: f32) -> (SampledSpectrum, f32) {
         let (lobe, mpdf) = microfacet_lobe_pdf(&self.coating.mf, wo, wi);
         let pdf = ps * mpdf + (1.0 - ps) * cosine_hemisphere_pdf(wi.z);
         (self.value(wo, wi, lobe, t_o), pdf)
@@ -638,9 +644,8 @@ impl RoughPlastic<'_> {
         }
         // `eval` and `pdf` at once, sharing the microfacet terms and the transmittance towards
         // wo: the same numbers, bit for bit.
-        let (lobe, mpdf) = microfacet_lobe_pdf(&self.coating.mf, wo, wi);
-        let pdf = ps * mpdf + (1.0 - ps) * cosine_hemisphere_pdf(wi.z);
-        reflection_sample(wi, pdf, self.value(wo, wi, lobe, t_o))
+        let (f, pdf) = self.eval_pdf_with(wo, wi, t_o, ps);
+        reflection_sample(wi, pdf, f)
     }
 }
 
