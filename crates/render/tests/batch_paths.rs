@@ -97,11 +97,28 @@ fn mixed_scene_with(spectral: bool, sky: bool) -> Scene {
         eta: 1.5,
         nonlinear: false,
     }));
+    // Rough GGX conductors, shaded in the batch's lanes: gold, and a two-sided tinted one
+    // without an index.
+    let gold = b.add_material(Material::one_sided(Model::Conductor {
+        eta_k: Some((
+            Texture::Uniform(Rgb::new(0.143, 0.374, 1.442)),
+            Texture::Uniform(Rgb::new(3.983, 2.385, 1.603)),
+        )),
+        reflectance: Texture::Uniform(Rgb::splat(1.0)),
+        mf: Some(Microfacet::new(Distribution::Ggx, 0.2)),
+    }));
+    let rough = b.add_material(Material::two_sided(Model::Conductor {
+        eta_k: None,
+        reflectance: Texture::Uniform(Rgb::new(0.9, 0.8, 0.6)),
+        mf: Some(Microfacet::new(Distribution::Ggx, 0.45)),
+    }));
     let e = b.add_emission(base.emissions[0].clone());
     for (i, o) in base.geometry.objects().iter().enumerate() {
         let mat = match i {
             7 => mirror,
             6 => plastic,
+            5 if o.props.emission.is_none() => gold,
+            3 if o.props.emission.is_none() => rough,
             _ => o.props.material,
         };
         b.add_shape(o.shape.clone(), mat, o.props.emission.map(|_| e));
@@ -220,6 +237,26 @@ fn delta_scene(spectral: bool, every: bool) -> Scene {
             reflectance: clear(),
             mf: None,
         }),
+        // Rough conductors: GGX (shaded in the batch's lanes) with and without an index, one
+        // of them two-sided, and Beckmann (by the general vertex).
+        Material::one_sided(Model::Conductor {
+            eta_k: Some((
+                Texture::Uniform(Rgb::new(0.143, 0.374, 1.442)),
+                Texture::Uniform(Rgb::new(3.983, 2.385, 1.603)),
+            )),
+            reflectance: clear(),
+            mf: Some(Microfacet::new(Distribution::Ggx, 0.15)),
+        }),
+        Material::two_sided(Model::Conductor {
+            eta_k: None,
+            reflectance: Texture::Uniform(Rgb::new(0.9, 0.6, 0.3)),
+            mf: Some(Microfacet::new(Distribution::Ggx, 0.5)),
+        }),
+        Material::one_sided(Model::Conductor {
+            eta_k: None,
+            reflectance: clear(),
+            mf: Some(Microfacet::new(Distribution::Beckmann, 0.3)),
+        }),
     ];
     let spheres = [
         ([-0.5, -0.7, -0.3], 0.3),
@@ -230,6 +267,9 @@ fn delta_scene(spectral: bool, every: bool) -> Scene {
         ([-0.55, -0.1, 0.6], 0.2),
         ([0.6, -0.05, 0.5], 0.2),
         ([0.0, -0.8, 0.7], 0.15),
+        ([-0.2, 0.75, -0.6], 0.2),
+        ([0.75, 0.3, -0.1], 0.2),
+        ([-0.75, -0.75, 0.5], 0.15),
     ];
     for (m, (c, r)) in materials.into_iter().zip(spheres) {
         let m = b.add_material(m);

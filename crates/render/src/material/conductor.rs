@@ -4,7 +4,7 @@
 //! same lobe gives the Cook–Torrance model (see `cook_torrance.rs`).
 
 use super::fresnel::{fresnel_conductor, reflect};
-use super::microfacet::Microfacet;
+use super::microfacet::{Distribution, Microfacet};
 use super::sample::{reflection_sample, LocalSample};
 use crate::math::Vec3;
 use crate::spectrum::SampledSpectrum;
@@ -22,33 +22,22 @@ pub fn conductor_fresnel(
 }
 
 /// D·G / (4 cos θo) for the pair (the specular lobe without Fresnel, cosine of wi included), and
-/// the half vector.
+/// the half vector: [`microfacet_lobe_pdf`]'s first half.
 #[inline]
 pub fn microfacet_lobe(mf: &Microfacet, wo: Vec3, wi: Vec3) -> Option<(f32, Vec3)> {
-    if wo.z <= 0.0 || wi.z <= 0.0 {
-        return None;
-    }
-    let h = (wo + wi).normalize();
-    let v = mf.d(h) * mf.g(wo, wi, h) / (4.0 * wo.z);
-    (v > 0.0 && v.is_finite()).then_some((v, h))
+    microfacet_lobe_pdf(mf, wo, wi).0
 }
 
-/// The density of reflecting about a sampled microfacet normal: p(m) / (4 |wo·m|).
+/// The density of reflecting about a sampled microfacet normal: p(m) / (4 |wo·m|):
+/// [`microfacet_lobe_pdf`]'s second half.
 #[inline]
 pub fn microfacet_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> f32 {
-    if wo.z <= 0.0 || wi.z <= 0.0 {
-        return 0.0;
-    }
-    let h = (wo + wi).normalize();
-    let d = wo.dot(h);
-    if d <= 0.0 {
-        return 0.0;
-    }
-    mf.pdf(wo, h) / (4.0 * d)
+    microfacet_lobe_pdf(mf, wo, wi).1
 }
 
-/// [`microfacet_lobe`] and [`microfacet_pdf`] of one pair at once, sharing the half vector,
-/// D(h) and G1(wo, h): the same numbers, bit for bit, as the two calls.
+/// [`microfacet_lobe`] and [`microfacet_pdf`] of one pair at once, sharing the half vector h,
+/// D(h) and G1(wo, h). With GGX's visible normals the density is D(h)·G1(wo, h) / (4 cos θo)
+/// (wo·h cancels), and the lobe is that times G1(wi, h).
 #[inline]
 pub fn microfacet_lobe_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> (Option<(f32, Vec3)>, f32) {
     if wo.z <= 0.0 || wi.z <= 0.0 {
@@ -57,13 +46,19 @@ pub fn microfacet_lobe_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> (Option<(f32,
     let h = (wo + wi).normalize();
     let d = mf.d(h);
     let g1o = mf.g1(wo, h);
-    let v = d * (g1o * mf.g1(wi, h)) / (4.0 * wo.z);
-    let lobe = (v > 0.0 && v.is_finite()).then_some((v, h));
     let cos_oh = wo.dot(h);
-    if cos_oh <= 0.0 {
-        return (lobe, 0.0);
-    }
-    (lobe, mf.pdf_with(wo, h, d, g1o) / (4.0 * cos_oh))
+    let (v, pdf) = match mf.dist {
+        Distribution::Ggx => {
+            let p = d * g1o / (4.0 * wo.z);
+            (p * mf.g1(wi, h), p)
+        }
+        Distribution::Beckmann => {
+            let v = d * (g1o * mf.g1(wi, h)) / (4.0 * wo.z);
+            (v, mf.pdf_with(wo, h, d, g1o) / (4.0 * cos_oh))
+        }
+    };
+    let lobe = (v > 0.0 && v.is_finite()).then_some((v, h));
+    (lobe, if cos_oh <= 0.0 { 0.0 } else { pdf })
 }
 
 /// f·cos θi.
@@ -117,6 +112,22 @@ pub fn sample(
     }
     let m = mf.sample(wo, u);
     let wi = reflect(wo, m);
+    if mf.dist == Distribution::Ggx {
+        // Visible normals: the density D(m)·G1(wo, m) / (4 cos θo) and the weight
+        // f·cos θi / pdf = r·F(wo·m)·G1(wi, m), from the sampled normal itself.
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let g1i = mf.g1(wi, m);
+        let pdf = mf.d(m) * mf.g1(wo, m) / (4.0 * wo.z);
+        return (pdf > 0.0 && g1i > 0.0).then(|| LocalSample {
+            wi,
+            weight: r * conductor_fresnel(c, wo.dot(m)) * g1i,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        });
+    }
     let (lobe, pdf) = microfacet_lobe_pdf(mf, wo, wi);
     reflection_sample(wi, pdf, value(c, r, wo, lobe))
 }

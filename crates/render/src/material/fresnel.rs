@@ -49,11 +49,11 @@ pub fn fresnel_conductor(cos_i: f32, eta: SampledSpectrum, k: SampledSpectrum) -
         let a = safe_sqrt(0.5 * (a2b2 + t1));
         let term1 = a2b2 + c2;
         let term2 = 2.0 * cos_i * a;
-        let rs = (term1 - term2) / (term1 + term2);
         let term3 = a2b2 * c2 + s4;
         let term4 = term2 * s2;
-        let rp = rs * (term3 - term4) / (term3 + term4);
-        0.5 * (rs + rp)
+        // ½(Rs + Rp) with Rs = (t1 − t2)/(t1 + t2) and Rp = Rs·(t3 − t4)/(t3 + t4) is
+        // Rs·t3/(t3 + t4): one division.
+        (term1 - term2) * term3 / ((term1 + term2) * (term3 + term4))
     };
     eta.zip(k, one)
 }

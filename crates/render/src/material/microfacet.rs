@@ -41,13 +41,17 @@ impl Microfacet {
             return 0.0;
         }
         let ct2 = ct * ct;
-        let tan2 = (1.0 - ct2) / ct2;
         let a2 = self.alpha * self.alpha;
         let r = match self.dist {
-            Distribution::Beckmann => (-tan2 / a2).exp() / (PI * a2 * ct2 * ct2),
+            Distribution::Beckmann => {
+                let tan2 = (1.0 - ct2) / ct2;
+                (-tan2 / a2).exp() / (PI * a2 * ct2 * ct2)
+            }
             Distribution::Ggx => {
-                let k = 1.0 + tan2 / a2;
-                1.0 / (PI * a2 * ct2 * ct2 * k * k)
+                // α² / (π (cos²θ (α² − 1) + 1)²): 1 / (π α² cos⁴θ (1 + tan²θ / α²)²) with
+                // one division.
+                let k = ct2 * (a2 - 1.0) + 1.0;
+                a2 / (PI * k * k)
             }
         };
         if r * ct > 1e-20 {
@@ -71,12 +75,12 @@ impl Microfacet {
     #[inline]
     pub(crate) fn g1_visible(&self, w: Vec3) -> f32 {
         let ct = w.z.abs();
-        let tan = (1.0 - ct * ct).max(0.0).sqrt() / ct;
-        if tan == 0.0 {
-            return 1.0;
-        }
         match self.dist {
             Distribution::Beckmann => {
+                let tan = (1.0 - ct * ct).max(0.0).sqrt() / ct;
+                if tan == 0.0 {
+                    return 1.0;
+                }
                 // Walter et al. 2007's rational approximation of the exact Beckmann term.
                 let a = 1.0 / (self.alpha * tan);
                 if a >= 1.6 {
@@ -86,8 +90,10 @@ impl Microfacet {
                 }
             }
             Distribution::Ggx => {
-                let at = self.alpha * tan;
-                2.0 / (1.0 + (1.0 + at * at).sqrt())
+                // 2 / (1 + √(1 + α² tan²θ)), times cos θ above and below: one square root
+                // and one division (0 at grazing, 1 at normal incidence up to rounding).
+                let a2 = self.alpha * self.alpha;
+                (2.0 * ct) / (ct + (a2 + (1.0 - a2) * (ct * ct)).sqrt())
             }
         }
     }
@@ -203,8 +209,8 @@ impl NormalSampler {
     /// The part of a sample that depends on the second number alone: (cos φ, sin φ).
     #[inline]
     pub(crate) fn angular(u1: f32) -> (f32, f32) {
-        let phi = 2.0 * PI * u1;
-        (phi.cos(), phi.sin())
+        let (sin, cos) = crate::sampling::warp::sin_cos_turn(u1);
+        (cos, sin)
     }
 
     /// The normal given [`Microfacet::radial`] and [`NormalSampler::angular`].

@@ -349,7 +349,7 @@ impl Material {
 
 /// A conductor's complex index at `uv` in the lanes of `w`.
 #[inline]
-fn conductor_index(
+pub(crate) fn conductor_index(
     eta_k: Option<&(Texture, Texture)>,
     uv: Point2,
     w: &Wavelengths,

@@ -28,11 +28,30 @@ pub fn square_to_concentric_disk(u: [f32; 2]) -> Point2 {
 /// Sine and cosine of `x` ∈ [−π/4, π/4] by the minimax polynomials of Cephes' `sinf` and
 /// `cosf` (relative error below 2⁻²³ there), inline and without range reduction.
 #[inline(always)]
-fn sin_cos_quarter(x: f32) -> (f32, f32) {
+pub(crate) fn sin_cos_quarter(x: f32) -> (f32, f32) {
     let z = x * x;
     let s = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
     let c = ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z + 1.0;
     (s, c)
+}
+
+/// Sine and cosine of the angle 2π·`u` for `u` ∈ [0, 1]: the angle is split into a multiple
+/// m of π/2 (the nearest to it) and a remainder x ∈ [−π/4, π/4] (exactly: 4u − m is exact),
+/// whose sine and cosine [`sin_cos_quarter`] gives and a quarter turn permutes. Every step is
+/// a plain IEEE operation, so that sixteen-lane code repeats it bit for bit (the path tracer's
+/// microfacet lanes, `integrator/path/microfacet_lanes.rs`: change both), which `sin`/`cos`
+/// of the standard library would not allow.
+#[inline(always)]
+pub fn sin_cos_turn(u: f32) -> (f32, f32) {
+    let q = 4.0 * u;
+    let m = (q >= 0.5) as u32 + (q >= 1.5) as u32 + (q >= 2.5) as u32 + (q >= 3.5) as u32;
+    let (s, c) = sin_cos_quarter((q - m as f32) * (PI / 2.0));
+    match m & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
 }
 
 /// Cosine-weighted direction on the hemisphere z > 0 (Malley's method). The path tracer's
@@ -180,6 +199,19 @@ mod tests {
             );
         }
         assert_eq!(sin_cos_quarter(0.0), (0.0, 1.0));
+    }
+
+    #[test]
+    fn turn_sine_and_cosine_are_within_three_ulps_of_the_angle_s() {
+        let ulp = |a: f32, b: f64| ((a as f64 - b).abs() / f64::from(f32::EPSILON)) as f32;
+        for i in 0..=100_000u32 {
+            let u = i as f32 / 100_000.0;
+            let (s, c) = sin_cos_turn(u);
+            let phi = 2.0 * std::f64::consts::PI * u as f64;
+            // Absolute error in units of 2⁻²³ (the sine and cosine are at most 1).
+            assert!(ulp(s, phi.sin()) < 3.0, "sin at {u}: {s} vs {}", phi.sin());
+            assert!(ulp(c, phi.cos()) < 3.0, "cos at {u}: {c} vs {}", phi.cos());
+        }
     }
 
     #[test]

@@ -17,6 +17,7 @@
 //! and square root, no fused multiply-add; the NaN cases of `max`/`min` aside, which a finite
 //! throughput never meets).
 
+use super::microfacet_lanes::{self, Conductor};
 use super::MAX_SHADOWS;
 use crate::light::{LightSample, Target};
 use crate::math::{
@@ -55,6 +56,15 @@ pub(super) struct LambertLanes {
     /// Reflectance and the throughput before the vertex.
     r: [L; 4],
     beta: [L; 4],
+    /// Lanes whose surface is a rough GGX conductor rather than Lambert's: the outgoing
+    /// direction's local x and y (mirrored with z), α, the lanes with a complex index and the
+    /// index (η, k); the reflectance above scales the reflection.
+    ggx: u32,
+    wo_xy: [L; 2],
+    alpha: L,
+    fresnel: u32,
+    eta: [L; 4],
+    k: [L; 4],
     /// The light samples of the lanes: one per lane, or in the every-light mode (see
     /// `super::every_light`) one per light of the scene, each with its own shadow ray.
     lights: [LightLanes; MAX_SHADOWS],
@@ -133,6 +143,19 @@ pub(super) struct LambertVertex<'a> {
     pub u2: [f32; 2],
     pub u_rr: Option<f32>,
     pub eta_scale: f32,
+    /// A rough GGX conductor instead of Lambert's model (`reflectance` is then its
+    /// specular reflectance).
+    pub conductor: Option<ConductorVertex>,
+}
+
+/// What a rough GGX conductor adds to a lane's vertex.
+pub(super) struct ConductorVertex {
+    /// The outgoing direction's local x and y (`Bsdf::local_wo`; z is the vertex's `wo_z`).
+    pub wo_xy: [f32; 2],
+    /// GGX's α (`Microfacet::alpha`).
+    pub alpha: f32,
+    /// The complex index (η, k) in the path's lanes, or `None` for F = 1.
+    pub eta_k: Option<(SampledSpectrum, SampledSpectrum)>,
 }
 
 /// Next-event estimation's light at a Lambert vertex.
@@ -283,6 +306,21 @@ impl LambertLanes {
             self.u_rr[i] = u;
         }
         self.eta_scale[i] = v.eta_scale;
+        self.ggx &= !bit;
+        self.fresnel &= !bit;
+        if let Some(c) = &v.conductor {
+            self.ggx |= bit;
+            self.wo_xy[0][i] = c.wo_xy[0];
+            self.wo_xy[1][i] = c.wo_xy[1];
+            self.alpha[i] = c.alpha;
+            if let Some((eta, k)) = c.eta_k {
+                self.fresnel |= bit;
+                for j in 0..4 {
+                    self.eta[j][i] = eta.0[j];
+                    self.k[j][i] = k.0[j];
+                }
+            }
+        }
     }
 
     /// Puts light sample `k` of lane `i` in (a light sample made by the light, or none; not a
@@ -369,6 +407,8 @@ impl LambertLanes {
             &mut self.tri,
             &mut self.two_sided,
             &mut self.roulette,
+            &mut self.ggx,
+            &mut self.fresnel,
         ] {
             *mask &= m;
         }
@@ -515,15 +555,30 @@ impl WideKernel for Shade<'_> {
         );
         let light = w.or(w.and_not(w.mask(l0.light), rect), rect_ok);
         let pdf_light = w.select(rect, w.mul(w.load(&x.pick_pdf), pdf_rect), w.load(&l0.pdf));
+        let s = [w.load(&x.s[0]), w.load(&x.s[1]), w.load(&x.s[2])];
+        let tt = [w.load(&x.t[0]), w.load(&x.t[1]), w.load(&x.t[2])];
+        // The rough conductors' lanes, if any.
+        let conductor = (x.ggx != 0).then(|| {
+            let load4 = |a: &[L; 4]| [w.load(&a[0]), w.load(&a[1]), w.load(&a[2]), w.load(&a[3])];
+            Conductor {
+                on: w.mask(x.ggx),
+                wo: [w.load(&x.wo_xy[0]), w.load(&x.wo_xy[1]), wo_z],
+                alpha: w.load(&x.alpha),
+                fresnel: w.mask(x.fresnel),
+                eta: load4(&x.eta),
+                k: load4(&x.k),
+            }
+        });
         let at = Shading {
             all,
             pos,
             ng,
-            n,
+            frame: [s, tt, n],
             flip,
             wo_up,
             r,
             beta,
+            conductor,
         };
         let mut shadows = shadows.iter_mut();
         let Some(first) = shadows.next() else {
@@ -610,23 +665,49 @@ impl WideKernel for Shade<'_> {
         let dz = w.sqrt(w.select(w.lt(rad, zero), zero, rad));
         let pdf = w.select(w.gt(dz, zero), w.mul(dz, inv_pi), zero);
         let up = w.gt(pdf, zero);
-        w.store(pdf, &mut x.pdf);
+        let mut pdf = pdf;
         let lz = w.select(flip, w.neg(dz), dz);
-        let s = [w.load(&x.s[0]), w.load(&x.s[1]), w.load(&x.s[2])];
-        let tt = [w.load(&x.t[0]), w.load(&x.t[1]), w.load(&x.t[2])];
+        let to_world = |x: W::V, y: W::V, z: W::V, k: usize| {
+            w.add(w.add(w.mul(s[k], x), w.mul(tt[k], y)), w.mul(n[k], z))
+        };
         let mut ok = w.and(wo_up, up);
         let mut wi = [zero; 3];
         for k in 0..3 {
-            wi[k] = w.add(w.add(w.mul(s[k], dx), w.mul(tt[k], dy)), w.mul(n[k], lz));
+            wi[k] = to_world(dx, dy, lz, k);
             ok = w.and(ok, finite(w, wi[k]));
         }
+        // Lambert's sample weighs the throughput by the reflectance; a conductor's by f·cos/pdf
+        // of its sample of the visible normals (`conductor::sample`, `world_wi`).
+        let mut weight = r;
+        if let Some(c) = &at.conductor {
+            let u2 = [w.load(&x.u2[0]), w.load(&x.u2[1])];
+            let microfacet_lanes::Sample {
+                wi: o,
+                pdf: pdf_c,
+                weight: weight_c,
+                ok: ok_c,
+            } = microfacet_lanes::sample(w, c, &r, u2);
+            let z = w.select(flip, w.neg(o[2]), o[2]);
+            let mut ok_c = ok_c;
+            for k in 0..3 {
+                let d = to_world(o[0], o[1], z, k);
+                ok_c = w.and(ok_c, finite(w, d));
+                wi[k] = w.select(c.on, d, wi[k]);
+            }
+            for k in 0..4 {
+                weight[k] = w.select(c.on, weight_c[k], r[k]);
+            }
+            ok = w.or(w.and(c.on, ok_c), w.and_not(ok, c.on));
+            pdf = w.select(c.on, pdf_c, pdf);
+        }
+        w.store(pdf, &mut x.pdf);
         // The throughput, and Russian roulette: q = min(max(w, β)·Πη², 1), or 0.95 when the
         // path length is unlimited.
         let mut b = [zero; 4];
         let mut b_nonzero = w.mask(0);
         for k in 0..4 {
-            ok = w.and(ok, finite(w, r[k]));
-            b[k] = w.mul(beta[k], r[k]);
+            ok = w.and(ok, finite(w, weight[k]));
+            b[k] = w.mul(beta[k], weight[k]);
             b_nonzero = w.or(b_nonzero, w.ne(b[k], zero));
         }
         ok = w.and(ok, b_nonzero);
@@ -655,17 +736,18 @@ impl WideKernel for Shade<'_> {
 }
 
 /// What the light samples of a vertex's lanes share: the lanes in use, the shading point and
-/// its unit geometric normal, the shading normal, the mirrored lanes, the lanes seen from
-/// above, the reflectance and the throughput.
+/// its unit geometric normal, the shading frame (s, t, n), the mirrored lanes, the lanes seen
+/// from above, the reflectance, the throughput and the rough conductors' lanes.
 struct Shading<W: Wide> {
     all: W::M,
     pos: [W::V; 3],
     ng: [W::V; 3],
-    n: [W::V; 3],
+    frame: [[W::V; 3]; 3],
     flip: W::M,
     wo_up: W::M,
     r: [W::V; 4],
     beta: [W::V; 4],
+    conductor: Option<Conductor<W>>,
 }
 
 /// A light sample in the lanes: direction, radiance, the lanes that have one, its density
@@ -704,11 +786,12 @@ fn nee<W: Wide>(
         all,
         pos,
         ng,
-        n,
+        frame: [s, t, n],
         flip,
         wo_up,
         r,
         beta,
+        ref conductor,
     } = *at;
     let iz = w.add(
         w.add(w.mul(lw[0], n[0]), w.mul(lw[1], n[1])),
@@ -718,16 +801,27 @@ fn nee<W: Wide>(
     let f_on = w.and(wo_up, positive(w, all, iz));
     let cos_pi = w.mul(w.splat(INV_PI), iz);
     let mut f = [zero; 4];
-    let mut f_nonzero = w.mask(0);
     for k in 0..4 {
         f[k] = w.select(f_on, w.mul(r[k], cos_pi), zero);
-        f_nonzero = w.or(f_nonzero, w.ne(f[k], zero));
     }
-    let pdf_bsdf = w.select(
+    let mut pdf_bsdf = w.select(
         w.and(wo_up, w.gt(iz, zero)),
         w.mul(iz, w.splat(INV_PI)),
         zero,
     );
+    if let Some(c) = conductor {
+        // The direction in the shading frame (`Bsdf::local_wi`).
+        let wi = [dot(w, lw, s), dot(w, lw, t), iz];
+        let (f_c, pdf_c) = microfacet_lanes::eval_pdf(w, c, &r, wi);
+        for k in 0..4 {
+            f[k] = w.select(c.on, f_c[k], f[k]);
+        }
+        pdf_bsdf = w.select(c.on, pdf_c, pdf_bsdf);
+    }
+    let mut f_nonzero = w.mask(0);
+    for fk in f {
+        f_nonzero = w.or(f_nonzero, w.ne(fk, zero));
+    }
     let ratio = w.div(pdf_bsdf, pdf_light);
     let mis = w.select(
         w.eq(pdf_light, w.splat(f32::INFINITY)),
@@ -944,6 +1038,12 @@ mod tests {
                 u2: [rng.next_f32(), rng.next_f32()],
                 u_rr: (i % 3 != 1).then(|| rng.next_f32()),
                 eta_scale: 1.0 + rng.next_f32(),
+                // Some rough conductors, with and without a complex index.
+                conductor: (i % 3 == 2).then(|| ConductorVertex {
+                    wo_xy: [wo.dot(frame.s), wo.dot(frame.t)],
+                    alpha: 0.01 + rng.next_f32(),
+                    eta_k: (i % 2 == 0).then(|| (s(rng, 2.0), s(rng, 4.0))),
+                }),
             };
             lanes.set(i, &vertex);
             // Two more lights, as in the every-light mode (some lanes without a sample).

@@ -12,19 +12,23 @@
 //! (The course's branching estimator is [`super::CoursePath`].)
 
 mod lambert_lanes;
+mod microfacet_lanes;
 
 use super::{Integrator, SampleBatch, BATCH_SAMPLES};
 use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
-use crate::material::{relative_eta, sample_smooth, sample_specular, IncidencePlane, Model};
+use crate::material::{
+    conductor_index, relative_eta, sample_smooth, sample_specular, Distribution, IncidencePlane,
+    Model,
+};
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
-use lambert_lanes::{LambertLanes, LambertVertex, LaneLight};
+use lambert_lanes::{ConductorVertex, LambertLanes, LambertVertex, LaneLight};
 
 /// The unidirectional path tracer with next-event estimation and MIS.
 #[derive(Clone, Copy, Debug)]
@@ -270,14 +274,30 @@ impl Path {
             Some((lambert, lane)) => (Some(lambert), lane),
             None => (None, 0),
         };
-        if let (Some(lanes), Model::Diffuse { reflectance }) = (lambert, &material.model) {
-            // A Lambert vertex, left to the batch's Lambert lanes once its numbers are drawn
-            // (in the order the scalar vertex below draws them, the roulette's even where the
-            // path could end before it: it then goes unused). What `Material::bsdf`,
-            // `Bsdf::local_wo` and the shading point below give, without building the BSDF.
+        // Lambert's model, or a rough GGX conductor (its α and complex index).
+        let lane_model = match &material.model {
+            Model::Diffuse { reflectance } => Some((reflectance, None)),
+            Model::Conductor {
+                eta_k,
+                reflectance,
+                mf: Some(mf),
+            } if mf.dist == Distribution::Ggx => Some((reflectance, Some((mf.alpha, eta_k)))),
+            _ => None,
+        };
+        if let (Some(lanes), Some((reflectance, ggx))) = (lambert, lane_model) {
+            // A Lambert or rough-conductor vertex, left to the batch's lanes once its numbers
+            // are drawn (in the order the scalar vertex below draws them, the roulette's even
+            // where the path could end before it: it then goes unused). What
+            // `Material::bsdf`, `Bsdf::local_wo` and the shading point below give, without
+            // building the BSDF.
             let frame = si.shading_frame();
             let cos_o = si.wo.dot(frame.n);
             let flip = material.two_sided && cos_o < 0.0;
+            let conductor = ggx.map(|(alpha, eta_k)| ConductorVertex {
+                wo_xy: [si.wo.dot(frame.s), si.wo.dot(frame.t)],
+                alpha,
+                eta_k: conductor_index(eta_k.as_ref(), si.uv, &st.lambda),
+            });
             // The shading point, made where the path keeps it if it goes on (unread if it ends
             // here; a copy made on the stack would be reloaded whole from pieces).
             st.prev.p = si.p;
@@ -318,6 +338,7 @@ impl Path {
                     u2,
                     u_rr,
                     eta_scale: st.eta_scale,
+                    conductor,
                 },
             );
             return None;
