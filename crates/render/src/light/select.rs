@@ -376,6 +376,14 @@ impl LightSelector {
         Some((last, wl / sum, ONE_MINUS_EPSILON))
     }
 
+    /// True when [`LightSelector::pick`] never chooses light `i`, wherever it is asked (a
+    /// constant sky beside the one light with any importance): its density of being picked
+    /// is 0 everywhere, and MIS gives BSDF samples that find it their full weight.
+    #[inline(always)]
+    pub fn never_picks(&self, i: usize) -> bool {
+        matches!(self.sole, Some(k) if k != i)
+    }
+
     /// The probability with which [`LightSelector::pick`] chooses light `i` at `sp`.
     #[inline(always)]
     pub fn pmf(&self, lights: &[Light], sp: &ShadingPoint, i: usize) -> f32 {

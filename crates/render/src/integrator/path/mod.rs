@@ -227,13 +227,16 @@ impl Path {
                 st.l += st.beta * scene.background(&st.lambda);
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
-                    // (The density only where MIS weighs the light against the BSDF.)
-                    let sp = (!st.prev_delta).then_some(&st.prev);
+                    // (The density only where MIS weighs the light against the BSDF: not
+                    // after a delta vertex, nor for a light that light sampling never picks.)
+                    let never = scene.light_selector.never_picks(i as usize);
+                    let unweighed = st.prev_delta || never;
+                    let sp = (!unweighed).then_some(&st.prev);
                     let (le, pdf) = light.escaped_with_pdf(d, &st.lambda, sp);
                     if le.is_black() {
                         continue;
                     }
-                    let w = if st.prev_delta || !samples_lights(scene, st.depth - 1) {
+                    let w = if unweighed || !samples_lights(scene, st.depth - 1) {
                         1.0
                     } else {
                         let pick = scene.light_selector.pmf(lights, &st.prev, i as usize);
