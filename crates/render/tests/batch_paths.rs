@@ -9,7 +9,9 @@ use candela_render::accel::AccelKind;
 use candela_render::camera::Camera;
 use candela_render::integrator::{Integrator, Path, SampleBatch, BATCH_RUNS, SAMPLE_QUEUE};
 use candela_render::light::{Components, Emission, Environment, Light, PointLight};
-use candela_render::material::{Dispersion, Distribution, Material, Microfacet, Model};
+use candela_render::material::{
+    Dispersion, Distribution, Material, Microfacet, Model, RoughCoating,
+};
 use candela_render::math::{Point3, Transform, Vec3};
 use candela_render::sampling::{Pcg32, Sampler, SamplerKind};
 use candela_render::shape::{Mesh, Shape, Sphere};
@@ -112,6 +114,26 @@ fn mixed_scene_with(spectral: bool, sky: bool) -> Scene {
         reflectance: Texture::Uniform(Rgb::new(0.9, 0.8, 0.6)),
         mf: Some(Microfacet::new(Distribution::Ggx, 0.45)),
     }));
+    // Rough plastics with a GGX coating, also shaded in the lanes: one-sided and two-sided
+    // (`nonlinear`).
+    let rough_plastic = |two_sided: bool, alpha: f32, nonlinear: bool| {
+        let model = Model::RoughPlastic {
+            kd: Texture::Uniform(Rgb::new(0.15, 0.35, 0.6)),
+            ks: Texture::Uniform(Rgb::splat(0.8)),
+            coating: Box::new(RoughCoating::new(
+                Microfacet::new(Distribution::Ggx, alpha),
+                1.5,
+            )),
+            nonlinear,
+        };
+        if two_sided {
+            Material::two_sided(model)
+        } else {
+            Material::one_sided(model)
+        }
+    };
+    let coated = b.add_material(rough_plastic(false, 0.15, false));
+    let coated2 = b.add_material(rough_plastic(true, 0.4, true));
     let e = b.add_emission(base.emissions[0].clone());
     for (i, o) in base.geometry.objects().iter().enumerate() {
         let mat = match i {
@@ -119,6 +141,8 @@ fn mixed_scene_with(spectral: bool, sky: bool) -> Scene {
             6 => plastic,
             5 if o.props.emission.is_none() => gold,
             3 if o.props.emission.is_none() => rough,
+            4 if o.props.emission.is_none() => coated,
+            2 if o.props.emission.is_none() => coated2,
             _ => o.props.material,
         };
         b.add_shape(o.shape.clone(), mat, o.props.emission.map(|_| e));
@@ -257,6 +281,16 @@ fn delta_scene(spectral: bool, every: bool) -> Scene {
             reflectance: clear(),
             mf: Some(Microfacet::new(Distribution::Beckmann, 0.3)),
         }),
+        // A rough plastic with a GGX coating (in the lanes).
+        Material::two_sided(Model::RoughPlastic {
+            kd: Texture::Uniform(Rgb::new(0.6, 0.3, 0.2)),
+            ks: clear(),
+            coating: Box::new(RoughCoating::new(
+                Microfacet::new(Distribution::Ggx, 0.25),
+                1.5,
+            )),
+            nonlinear: false,
+        }),
     ];
     let spheres = [
         ([-0.5, -0.7, -0.3], 0.3),
@@ -270,6 +304,7 @@ fn delta_scene(spectral: bool, every: bool) -> Scene {
         ([-0.2, 0.75, -0.6], 0.2),
         ([0.75, 0.3, -0.1], 0.2),
         ([-0.75, -0.75, 0.5], 0.15),
+        ([0.2, 0.4, 0.4], 0.18),
     ];
     for (m, (c, r)) in materials.into_iter().zip(spheres) {
         let m = b.add_material(m);

@@ -22,17 +22,40 @@ pub fn conductor_fresnel(
 }
 
 /// D·G / (4 cos θo) for the pair (the specular lobe without Fresnel, cosine of wi included), and
-/// the half vector: [`microfacet_lobe_pdf`]'s first half.
+/// the half vector: [`microfacet_lobe_pdf`]'s first half, bit for bit.
 #[inline]
 pub fn microfacet_lobe(mf: &Microfacet, wo: Vec3, wi: Vec3) -> Option<(f32, Vec3)> {
-    microfacet_lobe_pdf(mf, wo, wi).0
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return None;
+    }
+    let h = (wo + wi).normalize();
+    let d = mf.d(h);
+    let g1o = mf.g1(wo, h);
+    let v = match mf.dist {
+        Distribution::Ggx => d * g1o / (4.0 * wo.z) * mf.g1(wi, h),
+        Distribution::Beckmann => d * (g1o * mf.g1(wi, h)) / (4.0 * wo.z),
+    };
+    (v > 0.0 && v.is_finite()).then_some((v, h))
 }
 
 /// The density of reflecting about a sampled microfacet normal: p(m) / (4 |wo·m|):
-/// [`microfacet_lobe_pdf`]'s second half.
+/// [`microfacet_lobe_pdf`]'s second half, bit for bit.
 #[inline]
 pub fn microfacet_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> f32 {
-    microfacet_lobe_pdf(mf, wo, wi).1
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return 0.0;
+    }
+    let h = (wo + wi).normalize();
+    let cos_oh = wo.dot(h);
+    if cos_oh <= 0.0 {
+        return 0.0;
+    }
+    let d = mf.d(h);
+    let g1o = mf.g1(wo, h);
+    match mf.dist {
+        Distribution::Ggx => d * g1o / (4.0 * wo.z),
+        Distribution::Beckmann => mf.pdf_with(wo, h, d, g1o) / (4.0 * cos_oh),
+    }
 }
 
 /// [`microfacet_lobe`] and [`microfacet_pdf`] of one pair at once, sharing the half vector h,

@@ -570,6 +570,16 @@ pub struct RoughPlastic<'a> {
 }
 
 impl RoughPlastic<'_> {
+    /// What [`RoughPlastic::sample`] and [`RoughPlastic::eval_pdf`] compute from the outgoing
+    /// direction's local z alone: the coating's transmittance towards it, the coating lobe's
+    /// probability, and the base's effective reflectance (for the path tracer's lanes).
+    pub(crate) fn lane_terms(&self, wo_z: f32) -> (f32, f32, SampledSpectrum) {
+        let c = self.coating;
+        let t_o = c.transmittance(wo_z);
+        let kb = base(self.kd, c.internal_reflectance, self.nonlinear);
+        (t_o, self.specular_probability(t_o), kb)
+    }
+
     fn specular_probability(&self, t_i: f32) -> f32 {
         specular_probability(self.kd, self.ks, 1.0 - t_i)
     }

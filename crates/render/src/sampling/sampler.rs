@@ -526,6 +526,41 @@ impl Sampler {
         (u, u2, roulette.then(|| self.next_1d()))
     }
 
+    /// [`Sampler::lambert_numbers`] with the number passed over there: what a vertex that
+    /// chooses between lobes draws (the rough plastic of the path tracer's lanes), what
+    /// [`Sampler::next_2d`], [`Sampler::next_1d`], [`Sampler::next_2d`] and
+    /// [`Sampler::next_1d`] give one after another.
+    #[inline(always)]
+    pub fn surface_numbers(&mut self, roulette: bool) -> ([f32; 2], f32, [f32; 2], Option<f32>) {
+        if let Mode::Sobol(_) = self.mode {
+            let d = self.dim as usize;
+            let j = self.index.wrapping_sub(self.chunk) as usize;
+            // The tables of dimensions d, d + 2, d + 3 and (with the roulette) d + 5.
+            let need = if roulette { 0b10_1101 } else { 0b1101 };
+            if d + 6 <= BATCH_DIMS
+                && j < CHUNK
+                && (self.batched >> d) & need == need
+                && j >= self.batch_from[d] as usize
+                && j >= self.batch_from[d + 2] as usize
+                && j >= self.batch_from[d + 3] as usize
+                && (!roulette || j >= self.batch_from[d + 5] as usize)
+            {
+                self.dim += if roulette { 6 } else { 5 };
+                let u_rr = roulette.then(|| self.batch[d + 5][j][0]);
+                return (
+                    self.batch[d][j],
+                    self.batch[d + 2][j][0],
+                    self.batch[d + 3][j],
+                    u_rr,
+                );
+            }
+        }
+        let u = self.next_2d();
+        let u1 = self.next_1d();
+        let u2 = self.next_2d();
+        (u, u1, u2, roulette.then(|| self.next_1d()))
+    }
+
     /// A uniform integer in `[0, n)` (`n` > 0).
     #[inline]
     pub fn next_index(&mut self, n: u32) -> u32 {
@@ -792,7 +827,18 @@ mod tests {
                         one.skip_1d();
                         let u2 = one.next_2d();
                         let u_rr = roulette.then(|| one.next_1d());
+                        let mut other = all.clone();
+                        let mut third = all.clone();
+                        third.next_2d();
+                        let u1 = third.next_1d();
                         let got = all.lambert_numbers(roulette);
+                        // The same with the number passed over, and the same cursor after.
+                        let full = other.surface_numbers(roulette);
+                        assert_eq!(other.next_1d().to_bits(), all.clone().next_1d().to_bits());
+                        assert_eq!(full.1.to_bits(), u1.to_bits());
+                        assert_eq!(full.0.map(f32::to_bits), got.0.map(f32::to_bits));
+                        assert_eq!(full.2.map(f32::to_bits), got.1.map(f32::to_bits));
+                        assert_eq!(full.3.map(f32::to_bits), got.2.map(f32::to_bits));
                         let at = format!("{kind:?} {first} {index} {start} {roulette}");
                         assert_eq!(got.0.map(f32::to_bits), u.map(f32::to_bits), "{at}");
                         assert_eq!(got.1.map(f32::to_bits), u2.map(f32::to_bits), "{at}");

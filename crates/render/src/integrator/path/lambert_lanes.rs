@@ -17,9 +17,10 @@
 //! and square root, no fused multiply-add; the NaN cases of `max`/`min` aside, which a finite
 //! throughput never meets).
 
-use super::microfacet_lanes::{self, Conductor};
+use super::microfacet_lanes::{self, Conductor, Plastic};
 use super::MAX_SHADOWS;
 use crate::light::{LightSample, Target};
+use crate::material::RoughCoating;
 use crate::math::{
     Frame, Normal3, Point2, Point3, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON,
 };
@@ -41,7 +42,7 @@ pub(super) type Pending = [[SampledSpectrum; BATCH]; MAX_SHADOWS];
 /// The deferred Lambert vertices of a batch step, structure of arrays: lane i is the path in
 /// lane i of the batch (`Default`: no lanes).
 #[derive(Default)]
-pub(super) struct LambertLanes {
+pub(super) struct LambertLanes<'s> {
     /// The lanes in use.
     pub(super) lanes: u32,
     /// The shading point and its unit geometric normal.
@@ -57,14 +58,27 @@ pub(super) struct LambertLanes {
     r: [L; 4],
     beta: [L; 4],
     /// Lanes whose surface is a rough GGX conductor rather than Lambert's: the outgoing
-    /// direction's local x and y (mirrored with z), α, the lanes with a complex index and the
+    /// direction in the world, α, the lanes with a complex index and the
     /// index (η, k); the reflectance above scales the reflection.
     ggx: u32,
-    wo_xy: [L; 2],
+    wo_w: [L; 3],
     alpha: L,
     fresnel: u32,
     eta: [L; 4],
     k: [L; 4],
+    /// Lanes whose surface is a rough plastic with a GGX coating (`wo_w` and `alpha` as for
+    /// a conductor): the coating's relative index, its transmittance towards wo, the coating
+    /// lobe's probability, the coating's and the base's reflectances
+    /// (`RoughPlastic::lane_terms`), the number choosing the lobe and each lane's coating
+    /// (its transmittance table).
+    plastic: u32,
+    eta_c: L,
+    t_o: L,
+    ps: L,
+    ks: [L; 4],
+    kb: [L; 4],
+    u1: L,
+    coatings: [Option<&'s RoughCoating>; BATCH],
     /// The light samples of the lanes: one per lane, or in the every-light mode (see
     /// `super::every_light`) one per light of the scene, each with its own shadow ray.
     lights: [LightLanes; MAX_SHADOWS],
@@ -143,15 +157,24 @@ pub(super) struct LambertVertex<'a> {
     pub u2: [f32; 2],
     pub u_rr: Option<f32>,
     pub eta_scale: f32,
-    /// A rough GGX conductor instead of Lambert's model (`reflectance` is then its
-    /// specular reflectance).
-    pub conductor: Option<ConductorVertex>,
+}
+
+/// What a rough plastic with a GGX coating adds to a lane's vertex.
+pub(super) struct PlasticVertex<'a> {
+    /// The coating.
+    pub coating: &'a RoughCoating,
+    /// `RoughPlastic::lane_terms`: the transmittance towards wo, the coating lobe's
+    /// probability and the base's effective reflectance; the coating's reflectance.
+    pub t_o: f32,
+    pub ps: f32,
+    pub kb: SampledSpectrum,
+    pub ks: SampledSpectrum,
+    /// The number choosing between the coating's lobe and the base.
+    pub u1: f32,
 }
 
 /// What a rough GGX conductor adds to a lane's vertex.
 pub(super) struct ConductorVertex {
-    /// The outgoing direction's local x and y (`Bsdf::local_wo`; z is the vertex's `wo_z`).
-    pub wo_xy: [f32; 2],
     /// GGX's α (`Microfacet::alpha`).
     pub alpha: f32,
     /// The complex index (η, k) in the path's lanes, or `None` for F = 1.
@@ -203,7 +226,7 @@ pub(super) struct LambertOutcome {
     pub next: Option<(SampledSpectrum, f32)>,
 }
 
-impl LambertLanes {
+impl<'s> LambertLanes<'s> {
     /// Puts lane `i`'s vertex in.
     #[inline(always)]
     pub(super) fn set(&mut self, i: usize, v: &LambertVertex) {
@@ -306,12 +329,25 @@ impl LambertLanes {
             self.u_rr[i] = u;
         }
         self.eta_scale[i] = v.eta_scale;
-        self.ggx &= !bit;
-        self.fresnel &= !bit;
-        if let Some(c) = &v.conductor {
+    }
+
+    /// Makes lane `i` (put in by [`LambertLanes::set`]) a rough conductor's or a rough
+    /// plastic's, with the outgoing direction `wo` (world; its local x and y are the kernel's
+    /// to compute: here, the frame's tangents read again would be loaded in pieces the stores
+    /// cannot be forwarded to). Out of line, so that the Lambert vertex stays as short as it
+    /// was without these models (inlined, the Cornell box's frame took 4 % longer).
+    #[inline(never)]
+    pub(super) fn set_surface(
+        &mut self,
+        i: usize,
+        wo: Vec3,
+        conductor: Option<ConductorVertex>,
+        plastic: Option<PlasticVertex<'s>>,
+    ) {
+        let bit = 1u32 << i;
+        set3(&mut self.wo_w, i, wo);
+        if let Some(c) = conductor {
             self.ggx |= bit;
-            self.wo_xy[0][i] = c.wo_xy[0];
-            self.wo_xy[1][i] = c.wo_xy[1];
             self.alpha[i] = c.alpha;
             if let Some((eta, k)) = c.eta_k {
                 self.fresnel |= bit;
@@ -320,6 +356,19 @@ impl LambertLanes {
                     self.k[j][i] = k.0[j];
                 }
             }
+        }
+        if let Some(p) = plastic {
+            self.plastic |= bit;
+            self.alpha[i] = p.coating.mf.alpha;
+            self.eta_c[i] = p.coating.eta;
+            self.t_o[i] = p.t_o;
+            self.ps[i] = p.ps;
+            self.u1[i] = p.u1;
+            for j in 0..4 {
+                self.ks[j][i] = p.ks.0[j];
+                self.kb[j][i] = p.kb.0[j];
+            }
+            self.coatings[i] = Some(p.coating);
         }
     }
 
@@ -409,6 +458,7 @@ impl LambertLanes {
             &mut self.roulette,
             &mut self.ggx,
             &mut self.fresnel,
+            &mut self.plastic,
         ] {
             *mask &= m;
         }
@@ -422,12 +472,32 @@ impl LambertLanes {
                 *mask &= m;
             }
         }
-        crate::simd::run_wide_at(level, Shade(self, next, shadows));
+        // Lambert lanes alone take a kernel compiled without the other models: with them in,
+        // the compiler computes parts of their terms ahead of the tests that skip them, and
+        // the Lambert kernel ran several times slower (see `Shade`).
+        match (self.ggx != 0, self.plastic != 0) {
+            (false, false) => {
+                crate::simd::run_wide_at(level, Shade::<false, false>(self, next, shadows))
+            }
+            (true, false) => {
+                crate::simd::run_wide_at(level, Shade::<true, false>(self, next, shadows))
+            }
+            (false, true) => {
+                crate::simd::run_wide_at(level, Shade::<false, true>(self, next, shadows))
+            }
+            (true, true) => {
+                crate::simd::run_wide_at(level, Shade::<true, true>(self, next, shadows))
+            }
+        }
         for (l, pending) in self.lights[..=self.extra].iter().zip(pending) {
             for i in crate::math::lanes(l.shadow) {
                 pending[i] = SampledSpectrum([l.c[0][i], l.c[1][i], l.c[2][i], l.c[3][i]]);
             }
         }
+        // The other models' lanes are put in afresh at each step (`set_surface`).
+        self.ggx = 0;
+        self.fresnel = 0;
+        self.plastic = 0;
     }
 
     /// What is left of lane `i` once [`LambertLanes::shade`] has run: the shadow ray of a light
@@ -466,10 +536,15 @@ fn put_texture(a: &mut [L; 4], i: usize, t: &Texture, uv: Point2, w: &Wavelength
     }
 }
 
-/// [`LambertLanes::shade`] as a kernel.
-struct Shade<'a>(&'a mut LambertLanes, &'a mut RayBatch, &'a mut Shadows);
+/// [`LambertLanes::shade`] as a kernel, with rough conductors (`C`) and rough plastics (`P`)
+/// among the lanes or not (without, their code is left out).
+struct Shade<'a, 's, const C: bool, const P: bool>(
+    &'a mut LambertLanes<'s>,
+    &'a mut RayBatch,
+    &'a mut Shadows,
+);
 
-impl WideKernel for Shade<'_> {
+impl<const C: bool, const P: bool> WideKernel for Shade<'_, '_, C, P> {
     type Output = ();
 
     #[inline(always)]
@@ -555,30 +630,54 @@ impl WideKernel for Shade<'_> {
         );
         let light = w.or(w.and_not(w.mask(l0.light), rect), rect_ok);
         let pdf_light = w.select(rect, w.mul(w.load(&x.pick_pdf), pdf_rect), w.load(&l0.pdf));
-        let s = [w.load(&x.s[0]), w.load(&x.s[1]), w.load(&x.s[2])];
-        let tt = [w.load(&x.t[0]), w.load(&x.t[1]), w.load(&x.t[2])];
-        // The rough conductors' lanes, if any.
-        let conductor = (x.ggx != 0).then(|| {
-            let load4 = |a: &[L; 4]| [w.load(&a[0]), w.load(&a[1]), w.load(&a[2]), w.load(&a[3])];
-            Conductor {
+        // The outgoing direction in the shading frame (`Bsdf::local_wo`, mirrored in z), for
+        // the rough conductors' and plastics' lanes. (No closures here: they would not inherit
+        // the kernel's instruction set.)
+        let wo = if C || P {
+            let o = load3(w, &x.wo_w);
+            [dot(w, o, load3(w, &x.s)), dot(w, o, load3(w, &x.t)), wo_z]
+        } else {
+            [zero; 3]
+        };
+        let conductor = if C {
+            Some(Conductor {
                 on: w.mask(x.ggx),
-                wo: [w.load(&x.wo_xy[0]), w.load(&x.wo_xy[1]), wo_z],
+                wo,
                 alpha: w.load(&x.alpha),
                 fresnel: w.mask(x.fresnel),
-                eta: load4(&x.eta),
-                k: load4(&x.k),
-            }
-        });
+                eta: load4(w, &x.eta),
+                k: load4(w, &x.k),
+            })
+        } else {
+            None
+        };
+        let plastic = if P {
+            Some(Plastic {
+                on: w.mask(x.plastic),
+                wo,
+                alpha: w.load(&x.alpha),
+                eta: w.load(&x.eta_c),
+                t_o: w.load(&x.t_o),
+                ps: w.load(&x.ps),
+                ks: load4(w, &x.ks),
+                kb: load4(w, &x.kb),
+            })
+        } else {
+            None
+        };
         let at = Shading {
             all,
             pos,
             ng,
-            frame: [s, tt, n],
+            tangents: (&x.s, &x.t),
+            n,
             flip,
             wo_up,
             r,
             beta,
             conductor,
+            plastic,
+            coatings: (&x.coatings, x.plastic),
         };
         let mut shadows = shadows.iter_mut();
         let Some(first) = shadows.next() else {
@@ -667,13 +766,12 @@ impl WideKernel for Shade<'_> {
         let up = w.gt(pdf, zero);
         let mut pdf = pdf;
         let lz = w.select(flip, w.neg(dz), dz);
-        let to_world = |x: W::V, y: W::V, z: W::V, k: usize| {
-            w.add(w.add(w.mul(s[k], x), w.mul(tt[k], y)), w.mul(n[k], z))
-        };
+        let s = [w.load(&x.s[0]), w.load(&x.s[1]), w.load(&x.s[2])];
+        let tt = [w.load(&x.t[0]), w.load(&x.t[1]), w.load(&x.t[2])];
         let mut ok = w.and(wo_up, up);
         let mut wi = [zero; 3];
         for k in 0..3 {
-            wi[k] = to_world(dx, dy, lz, k);
+            wi[k] = to_world(w, [s[k], tt[k], n[k]], dx, dy, lz);
             ok = w.and(ok, finite(w, wi[k]));
         }
         // Lambert's sample weighs the throughput by the reflectance; a conductor's by f·cos/pdf
@@ -690,7 +788,7 @@ impl WideKernel for Shade<'_> {
             let z = w.select(flip, w.neg(o[2]), o[2]);
             let mut ok_c = ok_c;
             for k in 0..3 {
-                let d = to_world(o[0], o[1], z, k);
+                let d = to_world(w, [s[k], tt[k], n[k]], o[0], o[1], z);
                 ok_c = w.and(ok_c, finite(w, d));
                 wi[k] = w.select(c.on, d, wi[k]);
             }
@@ -699,6 +797,34 @@ impl WideKernel for Shade<'_> {
             }
             ok = w.or(w.and(c.on, ok_c), w.and_not(ok, c.on));
             pdf = w.select(c.on, pdf_c, pdf);
+        }
+        // A rough plastic's (`RoughPlastic::sample`): the coating's lobe with probability
+        // `ps`, else the cosine-weighted direction above, weighed by f·cos over the mixture's
+        // density.
+        if let Some(p) = &at.plastic {
+            let u2 = [w.load(&x.u2[0]), w.load(&x.u2[1])];
+            let (_, spec) = microfacet_lanes::reflected(w, p.wo, p.alpha, u2);
+            let coat = w.lt(w.load(&x.u1), p.ps);
+            let o = [
+                w.select(coat, spec[0], dx),
+                w.select(coat, spec[1], dy),
+                w.select(coat, spec[2], dz),
+            ];
+            let t_i = transmittances(w, at.coatings, o[2]);
+            let (f, pdf_p) = microfacet_lanes::plastic_eval_pdf(w, p, o, t_i);
+            let mut ok_p = w.and_not(p.on, w.or(w.le(p.wo[2], zero), w.le(o[2], zero)));
+            ok_p = w.and(ok_p, w.and(w.gt(o[2], zero), w.gt(pdf_p, zero)));
+            let z = w.select(flip, w.neg(o[2]), o[2]);
+            for k in 0..3 {
+                let d = to_world(w, [s[k], tt[k], n[k]], o[0], o[1], z);
+                ok_p = w.and(ok_p, finite(w, d));
+                wi[k] = w.select(p.on, d, wi[k]);
+            }
+            for k in 0..4 {
+                weight[k] = w.select(p.on, w.div(f[k], pdf_p), weight[k]);
+            }
+            ok = w.or(w.and(p.on, ok_p), w.and_not(ok, p.on));
+            pdf = w.select(p.on, pdf_p, pdf);
         }
         w.store(pdf, &mut x.pdf);
         // The throughput, and Russian roulette: q = min(max(w, β)·Πη², 1), or 0.95 when the
@@ -737,17 +863,38 @@ impl WideKernel for Shade<'_> {
 
 /// What the light samples of a vertex's lanes share: the lanes in use, the shading point and
 /// its unit geometric normal, the shading frame (s, t, n), the mirrored lanes, the lanes seen
-/// from above, the reflectance, the throughput and the rough conductors' lanes.
-struct Shading<W: Wide> {
+/// from above, the reflectance, the throughput, the rough conductors' and rough plastics'
+/// lanes, and the plastics' coatings (with the plastics' lanes).
+struct Shading<'a, 's, W: Wide> {
     all: W::M,
     pos: [W::V; 3],
     ng: [W::V; 3],
-    frame: [[W::V; 3]; 3],
+    tangents: (&'a [L; 3], &'a [L; 3]),
+    n: [W::V; 3],
     flip: W::M,
     wo_up: W::M,
     r: [W::V; 4],
     beta: [W::V; 4],
     conductor: Option<Conductor<W>>,
+    plastic: Option<Plastic<W>>,
+    coatings: Coatings<'a, 's>,
+}
+
+/// Each lane's rough-plastic coating, and the lanes that have one.
+type Coatings<'a, 's> = (&'a [Option<&'s RoughCoating>; BATCH], u32);
+
+/// The coatings' transmittances ([`RoughCoating::transmittance`]) at the cosines `cos`, in
+/// the lanes that have a coating (a table each: looked up lane by lane).
+#[inline(always)]
+fn transmittances<W: Wide>(w: W, (coatings, lanes): Coatings, cos: W::V) -> W::V {
+    let mut a = [0.0; BATCH];
+    w.store(cos, &mut a);
+    for i in crate::math::lanes(lanes) {
+        if let Some(c) = coatings[i] {
+            a[i] = c.transmittance(a[i]);
+        }
+    }
+    w.load(&a)
 }
 
 /// A light sample in the lanes: direction, radiance, the lanes that have one, its density
@@ -769,7 +916,7 @@ struct LaneSample<W: Wide> {
 #[inline(always)]
 fn nee<W: Wide>(
     w: W,
-    at: &Shading<W>,
+    at: &Shading<'_, '_, W>,
     l: &mut LightLanes,
     ls: LaneSample<W>,
     shadows: &mut RayBatch,
@@ -786,12 +933,15 @@ fn nee<W: Wide>(
         all,
         pos,
         ng,
-        frame: [s, t, n],
+        tangents,
+        n,
         flip,
         wo_up,
         r,
         beta,
         ref conductor,
+        ref plastic,
+        coatings,
     } = *at;
     let iz = w.add(
         w.add(w.mul(lw[0], n[0]), w.mul(lw[1], n[1])),
@@ -809,14 +959,31 @@ fn nee<W: Wide>(
         w.mul(iz, w.splat(INV_PI)),
         zero,
     );
+    // The direction in the shading frame (`Bsdf::local_wi`), for the models that need more
+    // than its z (loaded here: kept from the start, the tangents crowded out the registers).
+    // (Not a closure: closures do not inherit the kernel's instruction set, and the
+    // operations in them would be calls.)
+    let local = conductor.is_some() || plastic.is_some();
+    let wi = if local {
+        let (s, t) = (load3(w, tangents.0), load3(w, tangents.1));
+        [dot(w, lw, s), dot(w, lw, t), iz]
+    } else {
+        [zero, zero, iz]
+    };
     if let Some(c) = conductor {
-        // The direction in the shading frame (`Bsdf::local_wi`).
-        let wi = [dot(w, lw, s), dot(w, lw, t), iz];
         let (f_c, pdf_c) = microfacet_lanes::eval_pdf(w, c, &r, wi);
         for k in 0..4 {
             f[k] = w.select(c.on, f_c[k], f[k]);
         }
         pdf_bsdf = w.select(c.on, pdf_c, pdf_bsdf);
+    }
+    if let Some(p) = plastic {
+        let t_i = transmittances(w, coatings, iz);
+        let (f_p, pdf_p) = microfacet_lanes::plastic_eval_pdf(w, p, wi, t_i);
+        for k in 0..4 {
+            f[k] = w.select(p.on, f_p[k], f[k]);
+        }
+        pdf_bsdf = w.select(p.on, pdf_p, pdf_bsdf);
     }
     let mut f_nonzero = w.mask(0);
     for fk in f {
@@ -893,6 +1060,25 @@ fn nee<W: Wide>(
     shadows.active |= l.shadow;
 }
 
+/// Four vectors of lanes.
+#[inline(always)]
+fn load4<W: Wide>(w: W, a: &[L; 4]) -> [W::V; 4] {
+    [w.load(&a[0]), w.load(&a[1]), w.load(&a[2]), w.load(&a[3])]
+}
+
+/// Three vectors of lanes.
+#[inline(always)]
+fn load3<W: Wide>(w: W, a: &[L; 3]) -> [W::V; 3] {
+    [w.load(&a[0]), w.load(&a[1]), w.load(&a[2])]
+}
+
+/// Component k of the local direction (x, y, z) in the world (`Frame::to_world`), given
+/// component k of the frame's axes `[s, t, n]`.
+#[inline(always)]
+fn to_world<W: Wide>(w: W, [s, t, n]: [W::V; 3], x: W::V, y: W::V, z: W::V) -> W::V {
+    w.add(w.add(w.mul(s, x), w.mul(t, y)), w.mul(n, z))
+}
+
 /// `!(a <= 0)` in the lanes of `all`: the scalar code's tests, NaN included.
 #[inline(always)]
 fn positive<W: Wide>(w: W, all: W::M, a: W::V) -> W::M {
@@ -949,7 +1135,10 @@ mod tests {
 
     /// Lanes of every kind, from random numbers: directions on both sides, lights facing both
     /// ways, delta lights, zero reflectances, roulette on some lanes.
-    fn random_lanes(rng: &mut Pcg32) -> (LambertLanes, Vec<Parallelogram>) {
+    fn random_lanes<'s>(
+        rng: &mut Pcg32,
+        coatings: &'s [RoughCoating],
+    ) -> (LambertLanes<'s>, Vec<Parallelogram>) {
         fn v(rng: &mut Pcg32) -> Vec3 {
             Vec3::new(
                 rng.next_f32() - 0.5,
@@ -1038,14 +1227,24 @@ mod tests {
                 u2: [rng.next_f32(), rng.next_f32()],
                 u_rr: (i % 3 != 1).then(|| rng.next_f32()),
                 eta_scale: 1.0 + rng.next_f32(),
-                // Some rough conductors, with and without a complex index.
-                conductor: (i % 3 == 2).then(|| ConductorVertex {
-                    wo_xy: [wo.dot(frame.s), wo.dot(frame.t)],
-                    alpha: 0.01 + rng.next_f32(),
-                    eta_k: (i % 2 == 0).then(|| (s(rng, 2.0), s(rng, 4.0))),
-                }),
             };
             lanes.set(i, &vertex);
+            // Some rough conductors, with and without a complex index, and rough plastics.
+            let conductor = (i % 3 == 2).then(|| ConductorVertex {
+                alpha: 0.01 + rng.next_f32(),
+                eta_k: (i % 2 == 0).then(|| (s(rng, 2.0), s(rng, 4.0))),
+            });
+            let plastic = (i % 3 == 1).then(|| PlasticVertex {
+                coating: &coatings[i % coatings.len()],
+                t_o: rng.next_f32(),
+                ps: rng.next_f32(),
+                kb: s(rng, 1.0),
+                ks: s(rng, 1.0),
+                u1: rng.next_f32(),
+            });
+            if i % 3 != 0 {
+                lanes.set_surface(i, wo, conductor, plastic);
+            }
             // Two more lights, as in the every-light mode (some lanes without a sample).
             for k in 1..3 {
                 let ls = ((i + k) % 5 != 0).then(|| LightSample {
@@ -1069,6 +1268,9 @@ mod tests {
 
     #[test]
     fn every_instruction_set_shades_the_same_bits() {
+        use crate::material::{Distribution, Microfacet};
+        let coatings =
+            [0.1, 0.4].map(|a| RoughCoating::new(Microfacet::new(Distribution::Ggx, a), 1.5));
         let levels = [SimdLevel::Sse, SimdLevel::Avx2, SimdLevel::Avx512];
         let supported = SimdLevel::supported();
         let mut rng = Pcg32::new(4, 7);
@@ -1076,7 +1278,7 @@ mod tests {
         for _ in 0..50 {
             let mut results = Vec::new();
             for &level in levels.iter().filter(|&&l| l <= supported) {
-                let (mut lanes, _quads) = random_lanes(&mut rng.clone());
+                let (mut lanes, _quads) = random_lanes(&mut rng.clone(), &coatings);
                 let mut next = RayBatch::default();
                 let mut shadows = [RayBatch::default(); MAX_SHADOWS];
                 let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];

@@ -8,7 +8,7 @@
 //! [`crate::sampling::warp::sin_cos_turn`]), so that a lane gets the bits a path gets alone
 //! (the NaN cases of `max` aside, which finite directions never meet). Change both together.
 
-use crate::math::PI;
+use crate::math::{INV_PI, PI};
 use crate::simd::Wide;
 
 /// What a rough conductor's lanes share: the lanes, the outgoing direction in the shading
@@ -22,6 +22,22 @@ pub(super) struct Conductor<W: Wide> {
     pub fresnel: W::M,
     pub eta: [W::V; 4],
     pub k: [W::V; 4],
+}
+
+/// What a rough plastic's lanes share (GGX coating): the lanes, the outgoing direction in the
+/// shading frame, the coating's α and relative index, its transmittance towards wo, the
+/// coating lobe's probability there, the coating's reflectance and the base's effective
+/// reflectance ([`crate::material::RoughPlastic::lane_terms`]).
+#[derive(Clone, Copy)]
+pub(super) struct Plastic<W: Wide> {
+    pub on: W::M,
+    pub wo: [W::V; 3],
+    pub alpha: W::V,
+    pub eta: W::V,
+    pub t_o: W::V,
+    pub ps: W::V,
+    pub ks: [W::V; 4],
+    pub kb: [W::V; 4],
 }
 
 /// `a·b` as `Vec3::dot` sums it.
@@ -98,6 +114,62 @@ fn fresnel<W: Wide>(w: W, cos_i: W::V, eta: W::V, k: W::V) -> W::V {
     )
 }
 
+/// `fresnel_dielectric(cos_i, eta).0`: the dielectric Fresnel reflectance.
+#[inline(always)]
+fn fresnel_dielectric<W: Wide>(w: W, cos_i: W::V, eta: W::V) -> W::V {
+    let (zero, one) = (w.splat(0.0), w.splat(1.0));
+    let outside = w.ge(cos_i, zero);
+    let inv = w.div(one, eta);
+    let eta_it = w.select(outside, eta, inv);
+    let eta_ti = w.select(outside, inv, eta);
+    let cos_t2 = w.sub(
+        one,
+        w.mul(w.mul(w.sub(one, w.mul(cos_i, cos_i)), eta_ti), eta_ti),
+    );
+    let ci = w.copysign(cos_i, one);
+    let ct = w.sqrt(cos_t2);
+    let (a, b) = (w.mul(eta_it, ct), w.mul(eta_it, ci));
+    let a_s = w.div(w.sub(ci, a), w.add(ci, a));
+    let a_p = w.div(w.sub(ct, b), w.add(ct, b));
+    let f = w.mul(w.splat(0.5), w.add(w.mul(a_s, a_s), w.mul(a_p, a_p)));
+    let total = w.or(w.le(cos_t2, zero), w.eq(ci, zero));
+    w.select(w.eq(eta, one), zero, w.select(total, one, f))
+}
+
+/// `RoughPlastic::eval_pdf` for the local direction `wi`, given the coating's transmittance
+/// `t_i` towards it: f·cos θi per spectral lane and the density of the plastic's sample
+/// (both 0 unless wo and wi are above the surface).
+#[inline(always)]
+pub(super) fn plastic_eval_pdf<W: Wide>(
+    w: W,
+    p: &Plastic<W>,
+    wi: [W::V; 3],
+    t_i: W::V,
+) -> ([W::V; 4], W::V) {
+    let (zero, one) = (w.splat(0.0), w.splat(1.0));
+    let both_up = w.and_not(p.on, w.or(w.le(p.wo[2], zero), w.le(wi[2], zero)));
+    let Lobe {
+        v,
+        lobe,
+        cos_oh,
+        pdf: mpdf,
+    } = lobe_pdf(w, p.on, p.alpha, p.wo, wi);
+    let inv_pi = w.splat(INV_PI);
+    let cos_pdf = w.select(w.gt(wi[2], zero), w.mul(wi[2], inv_pi), zero);
+    let pdf = w.add(w.mul(p.ps, mpdf), w.mul(w.sub(one, p.ps), cos_pdf));
+    let fr = fresnel_dielectric(w, cos_oh, p.eta);
+    let scale = w.div(
+        w.mul(w.mul(w.mul(inv_pi, wi[2]), p.t_o), t_i),
+        w.mul(p.eta, p.eta),
+    );
+    let mut f = [zero; 4];
+    for k in 0..4 {
+        let spec = w.select(lobe, w.mul(p.ks[k], w.mul(fr, v)), zero);
+        f[k] = w.select(both_up, w.add(spec, w.mul(p.kb[k], scale)), zero);
+    }
+    (f, w.select(both_up, pdf, zero))
+}
+
 /// `conductor::eval_pdf` for the local direction `wi`: f·cos θi per spectral lane (0 where the
 /// lobe is not positive and finite) and the density of sampling `wi`, with `r` the
 /// reflectance. Meaningful in the lanes of `c.on`.
@@ -109,26 +181,12 @@ pub(super) fn eval_pdf<W: Wide>(
     wi: [W::V; 3],
 ) -> ([W::V; 4], W::V) {
     let zero = w.splat(0.0);
-    let four = w.splat(4.0);
-    let wo = c.wo;
-    let both_up = w.and_not(c.on, w.or(w.le(wo[2], zero), w.le(wi[2], zero)));
-    let h = normalize(
-        w,
-        [
-            w.add(wo[0], wi[0]),
-            w.add(wo[1], wi[1]),
-            w.add(wo[2], wi[2]),
-        ],
-    );
-    let d = ggx_d(w, c.alpha, h[2]);
-    let cos_oh = dot(w, wo, h);
-    let g1o = ggx_g1(w, c.alpha, cos_oh, wo[2]);
-    let g1i = ggx_g1(w, c.alpha, dot(w, wi, h), wi[2]);
-    let p = w.div(w.mul(d, g1o), w.mul(four, wo[2]));
-    let v = w.mul(p, g1i);
-    let finite = w.eq(w.sub(v, v), zero);
-    let lobe = w.and(both_up, w.and(w.gt(v, zero), finite));
-    let pdf = w.select(w.and_not(both_up, w.le(cos_oh, zero)), p, zero);
+    let Lobe {
+        v,
+        lobe,
+        cos_oh,
+        pdf,
+    } = lobe_pdf(w, c.on, c.alpha, c.wo, wi);
     let mut f = [zero; 4];
     for k in 0..4 {
         let fr = w.select(
@@ -141,12 +199,89 @@ pub(super) fn eval_pdf<W: Wide>(
     (f, pdf)
 }
 
+/// `conductor::microfacet_lobe_pdf` for GGX in the lanes `on`: the lobe D·G/(4 cos θo) (valid
+/// in the lanes `lobe`), wo·h and the density of sampling `wi` (0 outside `on`).
+pub(super) struct Lobe<W: Wide> {
+    pub v: W::V,
+    pub lobe: W::M,
+    pub cos_oh: W::V,
+    pub pdf: W::V,
+}
+
+/// [`Lobe`] of the local directions `wo` and `wi`.
+#[inline(always)]
+pub(super) fn lobe_pdf<W: Wide>(
+    w: W,
+    on: W::M,
+    alpha: W::V,
+    wo: [W::V; 3],
+    wi: [W::V; 3],
+) -> Lobe<W> {
+    let zero = w.splat(0.0);
+    let both_up = w.and_not(on, w.or(w.le(wo[2], zero), w.le(wi[2], zero)));
+    let h = normalize(
+        w,
+        [
+            w.add(wo[0], wi[0]),
+            w.add(wo[1], wi[1]),
+            w.add(wo[2], wi[2]),
+        ],
+    );
+    let d = ggx_d(w, alpha, h[2]);
+    let cos_oh = dot(w, wo, h);
+    let g1o = ggx_g1(w, alpha, cos_oh, wo[2]);
+    let g1i = ggx_g1(w, alpha, dot(w, wi, h), wi[2]);
+    let p = w.div(w.mul(d, g1o), w.mul(w.splat(4.0), wo[2]));
+    let v = w.mul(p, g1i);
+    let finite = w.eq(w.sub(v, v), zero);
+    Lobe {
+        v,
+        lobe: w.and(both_up, w.and(w.gt(v, zero), finite)),
+        cos_oh,
+        pdf: w.select(w.and_not(both_up, w.le(cos_oh, zero)), p, zero),
+    }
+}
+
 /// `conductor::sample` with the numbers `u`: the lanes where the sample exists have wo and wi
 /// above the surface, a positive density and G1(wi, m).
 #[inline(always)]
 pub(super) fn sample<W: Wide>(w: W, c: &Conductor<W>, r: &[W::V; 4], u: [W::V; 2]) -> Sample<W> {
-    let (zero, one, half) = (w.splat(0.0), w.splat(1.0), w.splat(0.5));
+    let (zero, one) = (w.splat(0.0), w.splat(1.0));
     let (wo, alpha) = (c.wo, c.alpha);
+    let (m, wi) = reflected(w, wo, alpha, u);
+    // The density D(m)·G1(wo, m) / (4 cos θo) and the weight r·F(wo·m)·G1(wi, m).
+    let cos_om = dot(w, wo, m);
+    let g1i = ggx_g1(w, alpha, dot(w, wi, m), wi[2]);
+    let d = ggx_d(w, alpha, m[2]);
+    let pdf = w.div(
+        w.mul(d, ggx_g1(w, alpha, cos_om, wo[2])),
+        w.mul(w.splat(4.0), wo[2]),
+    );
+    let ok = w.and_not(c.on, w.or(w.le(wo[2], zero), w.le(wi[2], zero)));
+    let ok = w.and(ok, w.and(w.gt(pdf, zero), w.gt(g1i, zero)));
+    let mut weight = [zero; 4];
+    for k in 0..4 {
+        let fr = w.select(c.fresnel, fresnel(w, cos_om, c.eta[k], c.k[k]), one);
+        weight[k] = w.mul(w.mul(r[k], fr), g1i);
+    }
+    Sample {
+        wi,
+        pdf,
+        weight,
+        ok,
+    }
+}
+
+/// `Microfacet::sample` (GGX) and `reflect`: the visible normal m drawn with the numbers `u`
+/// from `wo`, and `wo` reflected about it.
+#[inline(always)]
+pub(super) fn reflected<W: Wide>(
+    w: W,
+    wo: [W::V; 3],
+    alpha: W::V,
+    u: [W::V; 2],
+) -> ([W::V; 3], [W::V; 3]) {
+    let (zero, one, half) = (w.splat(0.0), w.splat(1.0), w.splat(0.5));
     // `Microfacet::sampler`: the view direction stretched to the hemisphere configuration,
     // and a frame about it.
     let vh = normalize(w, [w.mul(alpha, wo[0]), w.mul(alpha, wo[1]), wo[2]]);
@@ -194,27 +329,7 @@ pub(super) fn sample<W: Wide>(w: W, c: &Conductor<W>, r: &[W::V; 4], u: [W::V; 2
         w.sub(w.mul(m[1], two_cos), wo[1]),
         w.sub(w.mul(m[2], two_cos), wo[2]),
     ];
-    // The density D(m)·G1(wo, m) / (4 cos θo) and the weight r·F(wo·m)·G1(wi, m).
-    let cos_om = dot(w, wo, m);
-    let g1i = ggx_g1(w, alpha, dot(w, wi, m), wi[2]);
-    let d = ggx_d(w, alpha, m[2]);
-    let pdf = w.div(
-        w.mul(d, ggx_g1(w, alpha, cos_om, wo[2])),
-        w.mul(w.splat(4.0), wo[2]),
-    );
-    let ok = w.and_not(c.on, w.or(w.le(wo[2], zero), w.le(wi[2], zero)));
-    let ok = w.and(ok, w.and(w.gt(pdf, zero), w.gt(g1i, zero)));
-    let mut weight = [zero; 4];
-    for k in 0..4 {
-        let fr = w.select(c.fresnel, fresnel(w, cos_om, c.eta[k], c.k[k]), one);
-        weight[k] = w.mul(w.mul(r[k], fr), g1i);
-    }
-    Sample {
-        wi,
-        pdf,
-        weight,
-        ok,
-    }
+    (m, wi)
 }
 
 /// A rough conductor's sample in the lanes: the local direction, its density, f·cos/pdf per
@@ -231,8 +346,18 @@ pub(super) struct Sample<W: Wide> {
 pub(super) fn sin_cos_turn<W: Wide>(w: W, u: W::V) -> (W::V, W::V) {
     let (zero, one) = (w.splat(0.0), w.splat(1.0));
     let q = w.mul(w.splat(4.0), u);
-    let step = |at: f32| w.select(w.ge(q, w.splat(at)), one, zero);
-    let m = w.add(w.add(w.add(step(0.5), step(1.5)), step(2.5)), step(3.5));
+    // (Selects, not a closure: closures do not inherit the kernel's instruction set.)
+    let (a, b, c, d) = (w.splat(0.5), w.splat(1.5), w.splat(2.5), w.splat(3.5));
+    let m = w.add(
+        w.add(
+            w.add(
+                w.select(w.ge(q, a), one, zero),
+                w.select(w.ge(q, b), one, zero),
+            ),
+            w.select(w.ge(q, c), one, zero),
+        ),
+        w.select(w.ge(q, d), one, zero),
+    );
     let (s, c) = sin_cos_quarter(w, w.mul(w.sub(q, m), w.splat(PI / 2.0)));
     // The quarter turns m mod 4: 1 and 3 swap sine and cosine; 1 and 2 negate the sine's
     // result, 2 and 3 the cosine's.

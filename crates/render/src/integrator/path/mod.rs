@@ -20,7 +20,7 @@ use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
 use crate::material::{
     conductor_index, relative_eta, sample_smooth, sample_specular, Distribution, IncidencePlane,
-    Model,
+    Model, RoughCoating, RoughPlastic,
 };
 use crate::math::{lanes, Ray, RayBatch, BATCH};
 use crate::sampling::warp::power_heuristic;
@@ -28,7 +28,7 @@ use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
-use lambert_lanes::{ConductorVertex, LambertLanes, LambertVertex, LaneLight};
+use lambert_lanes::{ConductorVertex, LambertLanes, LambertVertex, LaneLight, PlasticVertex};
 
 /// The unidirectional path tracer with next-event estimation and MIS.
 #[derive(Clone, Copy, Debug)]
@@ -188,6 +188,82 @@ fn eval_for(
     }
 }
 
+/// The models the batch's lanes shade ([`LambertLanes`]), with what each needs besides its
+/// first texture: a rough GGX conductor's α and complex index, a rough plastic's specular
+/// reflectance, coating and `nonlinear`.
+enum LaneModel<'s> {
+    Lambert,
+    Conductor(
+        f32,
+        &'s Option<(crate::texture::Texture, crate::texture::Texture)>,
+    ),
+    Plastic(&'s crate::texture::Texture, &'s RoughCoating, bool),
+}
+
+/// The numbers a rough conductor's or rough plastic's lane draws ([`Sampler::lambert_numbers`],
+/// or [`Sampler::surface_numbers`] for the plastic's choice of lobe), and what the lanes take
+/// of its model: `first` is its first texture, `wo_z` the outgoing direction's local z, `at`
+/// the texture coordinates and the path's wavelengths (the direction's local x and y are
+/// [`LambertLanes::set`]'s to compute). (Out of line: inlined into
+/// the vertex, it made the Lambert vertex's interaction go through memory, 4 % of the Cornell
+/// box's frame.)
+#[inline(never)]
+fn surface_lane<'s>(
+    model: LaneModel<'s>,
+    first: &'s crate::texture::Texture,
+    wo_z: f32,
+    (uv, lambda): (crate::math::Point2, &Wavelengths),
+    sampler: &mut Sampler,
+    roulette: bool,
+) -> LaneNumbers<'s> {
+    let refl =
+        |t: &crate::texture::Texture| t.spectral(uv, lambda, crate::spectrum::RgbRole::Reflectance);
+    match model {
+        LaneModel::Plastic(ks, coating, nonlinear) => {
+            let (u, u1, u2, u_rr) = sampler.surface_numbers(roulette);
+            let (kd, ks) = (refl(first), refl(ks));
+            let p = RoughPlastic {
+                kd,
+                ks,
+                coating,
+                nonlinear,
+            };
+            let (t_o, ps, kb) = p.lane_terms(wo_z);
+            let v = PlasticVertex {
+                coating,
+                t_o,
+                ps,
+                kb,
+                ks,
+                u1,
+            };
+            (u, u2, u_rr, None, Some(v))
+        }
+        LaneModel::Conductor(alpha, eta_k) => {
+            let (u, u2, u_rr) = sampler.lambert_numbers(roulette);
+            let c = ConductorVertex {
+                alpha,
+                eta_k: conductor_index(eta_k.as_ref(), uv, lambda),
+            };
+            (u, u2, u_rr, Some(c), None)
+        }
+        LaneModel::Lambert => {
+            let (u, u2, u_rr) = sampler.lambert_numbers(roulette);
+            (u, u2, u_rr, None, None)
+        }
+    }
+}
+
+/// What [`surface_lane`] gives: the light pair, the direction pair, the roulette's number, and
+/// the conductor's or plastic's terms.
+type LaneNumbers<'s> = (
+    [f32; 2],
+    [f32; 2],
+    Option<f32>,
+    Option<ConductorVertex>,
+    Option<PlasticVertex<'s>>,
+);
+
 /// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
 /// ray is unblocked (next-event estimation), and whether the path goes on.
 struct VertexOutcome {
@@ -205,13 +281,13 @@ impl Path {
     /// [`LambertLanes::shade`]: it then returns `None`. With `delta`, a vertex at a perfect
     /// mirror or a smooth dielectric is shaded by [`Path::delta_vertex`].
     #[inline(always)]
-    fn vertex(
+    fn vertex<'s>(
         &self,
-        scene: &Scene,
+        scene: &'s Scene,
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-        (defer, delta): (Option<(&mut LambertLanes, usize)>, bool),
+        (defer, delta): (Option<(&mut LambertLanes<'s>, usize)>, bool),
         every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
@@ -277,36 +353,55 @@ impl Path {
             Some((lambert, lane)) => (Some(lambert), lane),
             None => (None, 0),
         };
-        // Lambert's model, or a rough GGX conductor (its α and complex index).
+        // The models the lanes shade: Lambert's, a rough GGX conductor (its α and complex
+        // index), a rough plastic with a GGX coating.
         let lane_model = match &material.model {
-            Model::Diffuse { reflectance } => Some((reflectance, None)),
+            Model::Diffuse { reflectance } => Some((reflectance, LaneModel::Lambert)),
             Model::Conductor {
                 eta_k,
                 reflectance,
                 mf: Some(mf),
-            } if mf.dist == Distribution::Ggx => Some((reflectance, Some((mf.alpha, eta_k)))),
+            } if mf.dist == Distribution::Ggx => {
+                Some((reflectance, LaneModel::Conductor(mf.alpha, eta_k)))
+            }
+            Model::RoughPlastic {
+                kd,
+                ks,
+                coating,
+                nonlinear,
+            } if coating.mf.dist == Distribution::Ggx => {
+                Some((kd, LaneModel::Plastic(ks, coating, *nonlinear)))
+            }
             _ => None,
         };
-        if let (Some(lanes), Some((reflectance, ggx))) = (lambert, lane_model) {
-            // A Lambert or rough-conductor vertex, left to the batch's lanes once its numbers
-            // are drawn (in the order the scalar vertex below draws them, the roulette's even
-            // where the path could end before it: it then goes unused). What
+        if let (Some(lanes), Some((reflectance, model))) = (lambert, lane_model) {
+            // A Lambert, rough-conductor or rough-plastic vertex, left to the batch's lanes
+            // once its numbers are drawn (in the order the scalar vertex below draws them, the
+            // roulette's even where the path could end before it: it then goes unused). What
             // `Material::bsdf`, `Bsdf::local_wo` and the shading point below give, without
             // building the BSDF.
             let frame = si.shading_frame();
             let cos_o = si.wo.dot(frame.n);
             let flip = material.two_sided && cos_o < 0.0;
-            let conductor = ggx.map(|(alpha, eta_k)| ConductorVertex {
-                wo_xy: [si.wo.dot(frame.s), si.wo.dot(frame.t)],
-                alpha,
-                eta_k: conductor_index(eta_k.as_ref(), si.uv, &st.lambda),
-            });
+            let wo_z = if flip { -cos_o } else { cos_o };
+            let roulette = st.depth + 1 >= self.rr_depth;
+            let (u, u2, u_rr, surface) = match model {
+                LaneModel::Lambert => {
+                    let (u, u2, u_rr) = sampler.lambert_numbers(roulette);
+                    (u, u2, u_rr, None)
+                }
+                _ => {
+                    let at = (si.uv, &st.lambda);
+                    let (u, u2, u_rr, c, p) =
+                        surface_lane(model, reflectance, wo_z, at, sampler, roulette);
+                    (u, u2, u_rr, Some((c, p)))
+                }
+            };
             // The shading point, made where the path keeps it if it goes on (unread if it ends
             // here; a copy made on the stack would be reloaded whole from pieces).
             st.prev.p = si.p;
             st.prev.n = if cos_o < 0.0 { -frame.n } else { frame.n };
             st.prev.reflect_only = true;
-            let (u, u2, u_rr) = sampler.lambert_numbers(st.depth + 1 >= self.rr_depth);
             let light = if every.is_some() {
                 // Every light, each sampled by itself with the same numbers (as below).
                 for (k, light) in lights.iter().enumerate() {
@@ -331,7 +426,7 @@ impl Path {
                     p: si.p,
                     ng: si.n,
                     frame,
-                    wo_z: if flip { -cos_o } else { cos_o },
+                    wo_z,
                     flip,
                     reflectance,
                     uv: si.uv,
@@ -341,9 +436,11 @@ impl Path {
                     u2,
                     u_rr,
                     eta_scale: st.eta_scale,
-                    conductor,
                 },
             );
+            if let Some((conductor, plastic)) = surface {
+                lanes.set_surface(lane, si.wo, conductor, plastic);
+            }
             return None;
         }
         if delta {
