@@ -164,7 +164,7 @@ impl AreaLight {
                 )
             }
             // The path tracer's Lambert lanes repeat this for meshes whose triangles keep
-            // their faces (`integrator/path/lambert_lanes.rs`, `LaneLight::Tri`): change both.
+            // their faces (`integrator/path/surface_lanes.rs`, `LaneLight::Tri`): change both.
             AreaShape::Mesh { mesh, triangles } => {
                 let (tri, u0) = triangles.sample_discrete(u[0]);
                 let (b1, b2) = warp::square_to_uniform_triangle([u0, u[1]]);
@@ -192,7 +192,7 @@ impl AreaLight {
 
     /// [`AreaLight::sample`] for a parallelogram light (`None` for other shapes; `Some(None)`
     /// when the sample is unusable). The path tracer's Lambert lanes repeat it on sixteen lanes
-    /// (`integrator/path/lambert_lanes.rs`): change both.
+    /// (`integrator/path/surface_lanes.rs`): change both.
     #[inline(always)]
     pub(super) fn sample_parallelogram(
         &self,

@@ -1,7 +1,9 @@
 //! Rough conductors: the microfacet reflection F·D·G / (4 cos θo cos θi) with the conductor
 //! Fresnel term (Mitsuba `roughconductor`: `distribution` (beckmann), `alpha` (0.1), `eta`, `k`
 //! or `material`, `specular_reflectance`). With a dielectric Fresnel term and a diffuse base, the
-//! same lobe gives the Cook–Torrance model (see `cook_torrance.rs`).
+//! same lobe gives the Cook–Torrance model (see `cook_torrance.rs`). The path tracer's lanes
+//! repeat the GGX lobe, density and sample operation for operation
+//! (`integrator/path/microfacet_lanes.rs`): change both.
 
 use super::fresnel::{fresnel_conductor, reflect};
 use super::microfacet::{Distribution, Microfacet};

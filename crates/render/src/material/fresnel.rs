@@ -38,7 +38,9 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 }
 
 /// Fresnel reflectance of a conductor with complex relative index `eta + i·k` for light arriving
-/// from outside at cosine `cos_i` ≥ 0 (per channel).
+/// from outside at cosine `cos_i` ≥ 0 (per channel). This and [`fresnel_dielectric`]'s
+/// reflectance are repeated on sixteen lanes by the path tracer
+/// (`integrator/path/microfacet_lanes.rs`): change both.
 pub fn fresnel_conductor(cos_i: f32, eta: SampledSpectrum, k: SampledSpectrum) -> SampledSpectrum {
     let one = |eta: f32, k: f32| -> f32 {
         let c2 = cos_i * cos_i;

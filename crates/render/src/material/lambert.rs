@@ -1,6 +1,6 @@
 //! Lambertian diffuse reflection: f = ρ/π, sampled cosine-weighted. The path tracer shades
 //! Lambert vertices of a batch on sixteen lanes with the same operations
-//! (`integrator/path/lambert_lanes.rs`): a change here goes there too.
+//! (`integrator/path/surface_lanes.rs`): a change here goes there too.
 //!
 //! Scene syntax: `diffuse(pigment)` (candela), `<bsdf type="diffuse">` with `reflectance`
 //! (Mitsuba, default 0.5).

@@ -3,6 +3,9 @@
 //! Directions are in the local shading frame (+z is the macro normal). `alpha` is the
 //! roughness: the RMS slope for Beckmann, the width of the Trowbridge–Reitz lobe for GGX.
 //! GGX samples the distribution of visible normals (Heitz 2018); Beckmann samples D(m)·cos θm.
+//! GGX's D, G1 and sample are repeated on sixteen lanes by the path tracer
+//! (`integrator/path/microfacet_lanes.rs`) and by the rough coating's table (`plastic.rs`):
+//! change all three.
 
 use crate::math::{Vec3, PI};
 

@@ -113,7 +113,7 @@ pub fn offset_ray_origin(p: Point3, n: Normal3, w: Vec3) -> Point3 {
 /// moved away from zero for a positive offset), or by n/65536 near the origin (|p| < 1/32)
 /// where ULPs are too small. The three coordinates are moved at once (SSE2); the result is the
 /// same as coordinate by coordinate, the −0.0 case included (it is near the origin). The path
-/// tracer's Lambert lanes repeat it on sixteen lanes (`integrator/path/lambert_lanes.rs`).
+/// tracer's Lambert lanes repeat it on sixteen lanes (`integrator/path/surface_lanes.rs`).
 #[inline(always)]
 fn offset_unit(p: Point3, n: Normal3, w: Vec3) -> Point3 {
     const ORIGIN: f32 = 1.0 / 32.0;

@@ -37,7 +37,7 @@ pub(crate) fn sin_cos_quarter(x: f32) -> (f32, f32) {
 
 /// Sine and cosine of the angle 2π·`u` for `u` ∈ [0, 1]: the angle is split into a multiple
 /// m of π/2 (the nearest to it) and a remainder x ∈ [−π/4, π/4] (exactly: 4u − m is exact),
-/// whose sine and cosine [`sin_cos_quarter`] gives and a quarter turn permutes. Every step is
+/// whose sine and cosine `sin_cos_quarter` gives and a quarter turn permutes. Every step is
 /// a plain IEEE operation, so that sixteen-lane code repeats it bit for bit (the path tracer's
 /// microfacet lanes, `integrator/path/microfacet_lanes.rs`: change both), which `sin`/`cos`
 /// of the standard library would not allow.
@@ -55,7 +55,7 @@ pub fn sin_cos_turn(u: f32) -> (f32, f32) {
 }
 
 /// Cosine-weighted direction on the hemisphere z > 0 (Malley's method). The path tracer's
-/// Lambert lanes repeat it on sixteen lanes (`integrator/path/lambert_lanes.rs`): change both.
+/// Lambert lanes repeat it on sixteen lanes (`integrator/path/surface_lanes.rs`): change both.
 #[inline]
 pub fn square_to_cosine_hemisphere(u: [f32; 2]) -> Vec3 {
     let d = square_to_concentric_disk(u);

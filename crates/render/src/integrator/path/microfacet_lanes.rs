@@ -1,4 +1,4 @@
-//! The rough conductor (GGX) of [`super::lambert_lanes`]' lanes: its value and density for a
+//! The rough conductor (GGX) of [`super::surface_lanes`]' lanes: its value and density for a
 //! light sample's direction, and the sample of the next direction by the distribution of
 //! visible normals, sixteen lanes at once.
 //!

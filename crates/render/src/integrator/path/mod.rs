@@ -11,8 +11,8 @@
 //! Mitsuba: 1 shows only emitters seen directly, 2 adds direct lighting, -1 is unlimited.
 //! (The course's branching estimator is [`super::CoursePath`].)
 
-mod lambert_lanes;
 mod microfacet_lanes;
+mod surface_lanes;
 
 use super::{Integrator, SampleBatch, BATCH_SAMPLES};
 use crate::interaction::Hit;
@@ -28,7 +28,7 @@ use crate::sampling::Sampler;
 use crate::scene::Scene;
 use crate::spectrum::{SampledSpectrum, Wavelengths};
 use crate::stats::RayStats;
-use lambert_lanes::{ConductorVertex, LambertLanes, LambertVertex, LaneLight, PlasticVertex};
+use surface_lanes::{ConductorVertex, LaneLight, LaneVertex, PlasticVertex, SurfaceLanes};
 
 /// The unidirectional path tracer with next-event estimation and MIS.
 #[derive(Clone, Copy, Debug)]
@@ -188,7 +188,7 @@ fn eval_for(
     }
 }
 
-/// The models the batch's lanes shade ([`LambertLanes`]), with what each needs besides its
+/// The models the batch's lanes shade ([`SurfaceLanes`]), with what each needs besides its
 /// first texture: a rough GGX conductor's α and complex index, a rough plastic's specular
 /// reflectance, coating and `nonlinear`.
 enum LaneModel<'s> {
@@ -204,7 +204,7 @@ enum LaneModel<'s> {
 /// or [`Sampler::surface_numbers`] for the plastic's choice of lobe), and what the lanes take
 /// of its model: `first` is its first texture, `wo_z` the outgoing direction's local z, `at`
 /// the texture coordinates and the path's wavelengths (the direction's local x and y are
-/// [`LambertLanes::set`]'s to compute). (Out of line: inlined into
+/// [`SurfaceLanes::set`]'s to compute). (Out of line: inlined into
 /// the vertex, it made the Lambert vertex's interaction go through memory, 4 % of the Cornell
 /// box's frame.)
 #[inline(never)]
@@ -278,7 +278,7 @@ impl Path {
     ///
     /// With `defer` (the batch's Lambert lanes and this path's lane), a vertex at a Lambert
     /// surface stops once it has drawn its numbers and sampled a light, and leaves the rest to
-    /// [`LambertLanes::shade`]: it then returns `None`. With `delta`, a vertex at a perfect
+    /// [`SurfaceLanes::shade`]: it then returns `None`. With `delta`, a vertex at a perfect
     /// mirror or a smooth dielectric is shaded by [`Path::delta_vertex`].
     #[inline(always)]
     fn vertex<'s>(
@@ -287,7 +287,7 @@ impl Path {
         st: &mut PathState,
         hit: Option<Hit>,
         sampler: &mut Sampler,
-        (defer, delta): (Option<(&mut LambertLanes<'s>, usize)>, bool),
+        (defer, delta): (Option<(&mut SurfaceLanes<'s>, usize)>, bool),
         every: Option<&mut Shadows>,
     ) -> Option<VertexOutcome> {
         let done = Some(VertexOutcome {
@@ -422,7 +422,7 @@ impl Path {
             st.depth += 1;
             lanes.set(
                 lane,
-                &LambertVertex {
+                &LaneVertex {
                     p: si.p,
                     ng: si.n,
                     frame,
@@ -641,7 +641,7 @@ impl Path {
     /// glass, the cap at 0.95 gave 1.1–1.3% more RMSE (5 seeds) for the same time. Without a
     /// `max_depth` the cap stays at 0.95, which ends every path (a lossless one between
     /// mirrors, in a white furnace) with probability 1. False when the path ends.
-    /// (The Lambert lanes play it in SIMD: `lambert_lanes.rs`.)
+    /// (The Lambert lanes play it in SIMD: `surface_lanes.rs`.)
     #[inline(always)]
     fn roulette(&self, st: &mut PathState, sampler: &mut Sampler) -> bool {
         if st.depth >= self.rr_depth {
@@ -656,7 +656,7 @@ impl Path {
     }
 
     /// [`Path::sample_light`] for a Lambert lane: a parallelogram light of uniform radiance is
-    /// left to [`LambertLanes::shade`] to sample; other lights are sampled here.
+    /// left to [`SurfaceLanes::shade`] to sample; other lights are sampled here.
     #[inline(always)]
     fn lane_light<'s>(
         &self,
@@ -863,7 +863,7 @@ impl Path {
         let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
         let every = every_light(scene);
         let mut extra: Shadows = [None; MAX_SHADOWS];
-        let mut lambert = LambertLanes::default();
+        let mut lambert = SurfaceLanes::default();
         lambert.unbounded = self.max_depth.is_none();
         if every {
             lambert.extra = scene.lights.len() - 1;

@@ -1,14 +1,21 @@
-//! The Lambert vertices of a batch, shaded sixteen at once.
+//! The Lambert, rough-conductor and rough-plastic vertices of a batch, shaded sixteen at once.
 //!
 //! [`super::Path::radiance_batch`] runs the start of every vertex lane by lane (the hit's
-//! interaction, the emission it finds, the BSDF, the numbers the vertex draws and the light
-//! sample). At a Lambert surface, the common case, it then leaves the rest of the vertex here:
-//! the BSDF's value and density for the light sample with the MIS weight of next-event
-//! estimation, the cosine-weighted sample of the next direction, the throughput and Russian
-//! roulette. [`LambertLanes::shade`] does these for all such lanes with the sixteen-lane
-//! operations of [`crate::simd::Wide`], and [`LambertLanes::finish`] makes each lane's rays.
-//! A scene that samples every light at each vertex (`super::every_light`) hands over one light
-//! sample per light, each with its own batch of shadow rays.
+//! interaction, the emission it finds, the numbers the vertex draws and the light sample). At
+//! a Lambert surface, the common case, and at a rough conductor or a rough plastic with a GGX
+//! distribution, it then leaves the rest of the vertex here: the BSDF's value and density for
+//! the light sample with the MIS weight of next-event estimation, the sample of the next
+//! direction, the throughput and Russian roulette. [`SurfaceLanes::shade`] does these for all
+//! such lanes with the sixteen-lane operations of [`crate::simd::Wide`] (the microfacet terms
+//! in `microfacet_lanes.rs`), and [`SurfaceLanes::finish`] makes each lane's rays. A scene
+//! that samples every light at each vertex (`super::every_light`) hands over one light sample
+//! per light, each with its own batch of shadow rays.
+//!
+//! The kernel is compiled four times, with and without each of the other two models, and a
+//! step's lanes choose the variant: with the other models' code in, the compiler computed
+//! parts of their terms ahead of the tests that skip them, and a step of Lambert lanes alone
+//! took several times longer. The kernel holds no closures: they do not inherit the
+//! instruction set it is compiled for, and every operation in them became a call.
 //!
 //! Every operation is the one the scalar vertex makes ([`crate::material::Bsdf`] with a Lambert
 //! model, [`crate::sampling::warp`], [`power_heuristic`](crate::sampling::warp::power_heuristic)),
@@ -42,7 +49,7 @@ pub(super) type Pending = [[SampledSpectrum; BATCH]; MAX_SHADOWS];
 /// The deferred Lambert vertices of a batch step, structure of arrays: lane i is the path in
 /// lane i of the batch (`Default`: no lanes).
 #[derive(Default)]
-pub(super) struct LambertLanes<'s> {
+pub(super) struct SurfaceLanes<'s> {
     /// The lanes in use.
     pub(super) lanes: u32,
     /// The shading point and its unit geometric normal.
@@ -138,7 +145,7 @@ struct LightLanes {
 }
 
 /// What the scalar part of a vertex hands over for one Lambert lane.
-pub(super) struct LambertVertex<'a> {
+pub(super) struct LaneVertex<'a> {
     /// The hit point and its (unit) geometric normal.
     pub p: Point3,
     pub ng: Normal3,
@@ -185,7 +192,7 @@ pub(super) struct ConductorVertex {
 pub(super) enum LaneLight<'a> {
     /// No light to sample.
     None,
-    /// The light samples are in already ([`LambertLanes::set_sample`]).
+    /// The light samples are in already ([`SurfaceLanes::set_sample`]).
     Given,
     /// A light sample made by [`crate::light::Light::sample_from`], and the pick's probability.
     Sample(LightSample, f32),
@@ -220,16 +227,16 @@ pub(super) enum LaneLight<'a> {
     },
 }
 
-/// What [`LambertLanes::finish`] gives for a lane: the path's next throughput and direction
+/// What [`SurfaceLanes::finish`] gives for a lane: the path's next throughput and direction
 /// density (`None`: the path ends here).
-pub(super) struct LambertOutcome {
+pub(super) struct LaneOutcome {
     pub next: Option<(SampledSpectrum, f32)>,
 }
 
-impl<'s> LambertLanes<'s> {
+impl<'s> SurfaceLanes<'s> {
     /// Puts lane `i`'s vertex in.
     #[inline(always)]
-    pub(super) fn set(&mut self, i: usize, v: &LambertVertex) {
+    pub(super) fn set(&mut self, i: usize, v: &LaneVertex) {
         let bit = 1u32 << i;
         self.lanes |= bit;
         for (a, b) in [v.frame.s, v.frame.t, v.frame.n].into_iter().zip([
@@ -331,7 +338,7 @@ impl<'s> LambertLanes<'s> {
         self.eta_scale[i] = v.eta_scale;
     }
 
-    /// Makes lane `i` (put in by [`LambertLanes::set`]) a rough conductor's or a rough
+    /// Makes lane `i` (put in by [`SurfaceLanes::set`]) a rough conductor's or a rough
     /// plastic's, with the outgoing direction `wo` (world; its local x and y are the kernel's
     /// to compute: here, the frame's tangents read again would be loaded in pieces the stores
     /// cannot be forwarded to). Out of line, so that the Lambert vertex stays as short as it
@@ -429,7 +436,7 @@ impl<'s> LambertLanes<'s> {
     ///
     /// The rays of the lanes whose path goes on go straight into `next`, and the shadow rays
     /// of light sample `k` into `shadows[k]` (marked active there, with what they add in
-    /// `pending[k]`); [`LambertLanes::finish`] gives the rest.
+    /// `pending[k]`); [`SurfaceLanes::finish`] gives the rest.
     pub(super) fn shade(
         &mut self,
         next: &mut RayBatch,
@@ -439,7 +446,7 @@ impl<'s> LambertLanes<'s> {
         self.shade_at(SimdLevel::detected(), next, shadows, pending);
     }
 
-    /// [`LambertLanes::shade`] with the instructions of `level` (or the widest below it that
+    /// [`SurfaceLanes::shade`] with the instructions of `level` (or the widest below it that
     /// the CPU has).
     pub(super) fn shade_at(
         &mut self,
@@ -500,11 +507,11 @@ impl<'s> LambertLanes<'s> {
         self.plastic = 0;
     }
 
-    /// What is left of lane `i` once [`LambertLanes::shade`] has run: the shadow ray of a light
+    /// What is left of lane `i` once [`SurfaceLanes::shade`] has run: the shadow ray of a light
     /// sampled by [`crate::light::Light::sample_from`], and the path's next throughput and
     /// direction density (its ray is in the batch already).
     #[inline(always)]
-    pub(super) fn finish(&self, i: usize) -> LambertOutcome {
+    pub(super) fn finish(&self, i: usize) -> LaneOutcome {
         let bit = 1u32 << i;
         let next = (self.alive & bit != 0).then(|| {
             let beta = SampledSpectrum([
@@ -515,7 +522,7 @@ impl<'s> LambertLanes<'s> {
             ]);
             (beta, self.pdf[i])
         });
-        LambertOutcome { next }
+        LaneOutcome { next }
     }
 }
 
@@ -536,10 +543,10 @@ fn put_texture(a: &mut [L; 4], i: usize, t: &Texture, uv: Point2, w: &Wavelength
     }
 }
 
-/// [`LambertLanes::shade`] as a kernel, with rough conductors (`C`) and rough plastics (`P`)
+/// [`SurfaceLanes::shade`] as a kernel, with rough conductors (`C`) and rough plastics (`P`)
 /// among the lanes or not (without, their code is left out).
 struct Shade<'a, 's, const C: bool, const P: bool>(
-    &'a mut LambertLanes<'s>,
+    &'a mut SurfaceLanes<'s>,
     &'a mut RayBatch,
     &'a mut Shadows,
 );
@@ -1138,7 +1145,7 @@ mod tests {
     fn random_lanes<'s>(
         rng: &mut Pcg32,
         coatings: &'s [RoughCoating],
-    ) -> (LambertLanes<'s>, Vec<Parallelogram>) {
+    ) -> (SurfaceLanes<'s>, Vec<Parallelogram>) {
         fn v(rng: &mut Pcg32) -> Vec3 {
             Vec3::new(
                 rng.next_f32() - 0.5,
@@ -1169,7 +1176,7 @@ mod tests {
                 Parallelogram::new(p, v(rng), v(rng)).expect("quad")
             })
             .collect();
-        let mut lanes = LambertLanes::default();
+        let mut lanes = SurfaceLanes::default();
         for (i, q) in quads.iter().enumerate() {
             let n = v(rng).normalize();
             let frame = Frame::from_normal(n.to_normal());
@@ -1213,7 +1220,7 @@ mod tests {
                 },
             };
             let p = Point3::ORIGIN + v(rng) * if i % 7 == 0 { 0.01 } else { 5.0 };
-            let vertex = LambertVertex {
+            let vertex = LaneVertex {
                 p,
                 ng: v(rng).normalize().to_normal(),
                 frame,
