@@ -203,10 +203,9 @@ enum LaneModel<'s> {
 /// The numbers a rough conductor's or rough plastic's lane draws ([`Sampler::lambert_numbers`],
 /// or [`Sampler::surface_numbers`] for the plastic's choice of lobe), and what the lanes take
 /// of its model: `first` is its first texture, `wo_z` the outgoing direction's local z, `at`
-/// the texture coordinates and the path's wavelengths (the direction's local x and y are
-/// [`SurfaceLanes::set`]'s to compute). (Out of line: inlined into
-/// the vertex, it made the Lambert vertex's interaction go through memory, 4 % of the Cornell
-/// box's frame.)
+/// the texture coordinates and the path's wavelengths (the direction's local x and y are the
+/// lanes' to compute). Out of line, as [`SurfaceLanes::set_surface`] is, so that the Lambert
+/// vertex stays as short as it was without these models.
 #[inline(never)]
 fn surface_lane<'s>(
     model: LaneModel<'s>,
@@ -276,9 +275,9 @@ impl Path {
     /// found there, samples a light (the shadow ray is the caller's to test), samples the
     /// next direction and plays Russian roulette.
     ///
-    /// With `defer` (the batch's Lambert lanes and this path's lane), a vertex at a Lambert
-    /// surface stops once it has drawn its numbers and sampled a light, and leaves the rest to
-    /// [`SurfaceLanes::shade`]: it then returns `None`. With `delta`, a vertex at a perfect
+    /// With `defer` (the batch's lanes and this path's lane), a vertex at a Lambert surface, a
+    /// rough GGX conductor or a rough plastic with a GGX coating stops once it has drawn its
+    /// numbers and sampled a light, and leaves the rest to [`SurfaceLanes::shade`]: it then returns `None`. With `delta`, a vertex at a perfect
     /// mirror or a smooth dielectric is shaded by [`Path::delta_vertex`].
     #[inline(always)]
     fn vertex<'s>(
