@@ -503,27 +503,8 @@ impl Sampler {
     /// they hold them all.
     #[inline(always)]
     pub fn lambert_numbers(&mut self, roulette: bool) -> ([f32; 2], [f32; 2], Option<f32>) {
-        if let Mode::Sobol(_) = self.mode {
-            let d = self.dim as usize;
-            let j = self.index.wrapping_sub(self.chunk) as usize;
-            // The tables of dimensions d, d + 3 and (with the roulette) d + 5.
-            let need = if roulette { 0b10_1001 } else { 0b1001 };
-            if d + 6 <= BATCH_DIMS
-                && j < CHUNK
-                && (self.batched >> d) & need == need
-                && j >= self.batch_from[d] as usize
-                && j >= self.batch_from[d + 3] as usize
-                && (!roulette || j >= self.batch_from[d + 5] as usize)
-            {
-                self.dim += if roulette { 6 } else { 5 };
-                let u_rr = roulette.then(|| self.batch[d + 5][j][0]);
-                return (self.batch[d][j], self.batch[d + 3][j], u_rr);
-            }
-        }
-        let u = self.next_2d();
-        self.skip_1d();
-        let u2 = self.next_2d();
-        (u, u2, roulette.then(|| self.next_1d()))
+        let (u, _, u2, u_rr) = self.vertex_numbers::<false>(roulette);
+        (u, u2, u_rr)
     }
 
     /// [`Sampler::lambert_numbers`] with the number passed over there: what a vertex that
@@ -532,31 +513,43 @@ impl Sampler {
     /// [`Sampler::next_1d`] give one after another.
     #[inline(always)]
     pub fn surface_numbers(&mut self, roulette: bool) -> ([f32; 2], f32, [f32; 2], Option<f32>) {
+        self.vertex_numbers::<true>(roulette)
+    }
+
+    /// [`Sampler::surface_numbers`], its third number drawn only with `LOBE` (passed over, and
+    /// returned as 0, without).
+    #[inline(always)]
+    fn vertex_numbers<const LOBE: bool>(
+        &mut self,
+        roulette: bool,
+    ) -> ([f32; 2], f32, [f32; 2], Option<f32>) {
         if let Mode::Sobol(_) = self.mode {
             let d = self.dim as usize;
             let j = self.index.wrapping_sub(self.chunk) as usize;
-            // The tables of dimensions d, d + 2, d + 3 and (with the roulette) d + 5.
-            let need = if roulette { 0b10_1101 } else { 0b1101 };
+            // The tables of dimensions d, d + 3, (with the roulette) d + 5 and (with the
+            // lobe's number) d + 2.
+            let need = (if roulette { 0b10_1001 } else { 0b1001 }) | if LOBE { 0b100 } else { 0 };
             if d + 6 <= BATCH_DIMS
                 && j < CHUNK
                 && (self.batched >> d) & need == need
                 && j >= self.batch_from[d] as usize
-                && j >= self.batch_from[d + 2] as usize
+                && (!LOBE || j >= self.batch_from[d + 2] as usize)
                 && j >= self.batch_from[d + 3] as usize
                 && (!roulette || j >= self.batch_from[d + 5] as usize)
             {
                 self.dim += if roulette { 6 } else { 5 };
+                let u1 = if LOBE { self.batch[d + 2][j][0] } else { 0.0 };
                 let u_rr = roulette.then(|| self.batch[d + 5][j][0]);
-                return (
-                    self.batch[d][j],
-                    self.batch[d + 2][j][0],
-                    self.batch[d + 3][j],
-                    u_rr,
-                );
+                return (self.batch[d][j], u1, self.batch[d + 3][j], u_rr);
             }
         }
         let u = self.next_2d();
-        let u1 = self.next_1d();
+        let u1 = if LOBE {
+            self.next_1d()
+        } else {
+            self.skip_1d();
+            0.0
+        };
         let u2 = self.next_2d();
         (u, u1, u2, roulette.then(|| self.next_1d()))
     }

@@ -8,6 +8,7 @@
 //! [`crate::sampling::warp::sin_cos_turn`]), so that a lane gets the bits a path gets alone
 //! (the NaN cases of `max` aside, which finite directions never meet). Change both together.
 
+use super::surface_lanes::{dot, finite};
 use crate::math::{INV_PI, PI};
 use crate::simd::Wide;
 
@@ -38,15 +39,6 @@ pub(super) struct Plastic<W: Wide> {
     pub ps: W::V,
     pub ks: [W::V; 4],
     pub kb: [W::V; 4],
-}
-
-/// `a·b` as `Vec3::dot` sums it.
-#[inline(always)]
-fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
-    w.add(
-        w.add(w.mul(a[0], b[0]), w.mul(a[1], b[1])),
-        w.mul(a[2], b[2]),
-    )
 }
 
 /// `Vec3::normalize`: `v` times 1/|v|.
@@ -233,10 +225,9 @@ pub(super) fn lobe_pdf<W: Wide>(
     let g1i = ggx_g1(w, alpha, dot(w, wi, h), wi[2]);
     let p = w.div(w.mul(d, g1o), w.mul(w.splat(4.0), wo[2]));
     let v = w.mul(p, g1i);
-    let finite = w.eq(w.sub(v, v), zero);
     Lobe {
         v,
-        lobe: w.and(both_up, w.and(w.gt(v, zero), finite)),
+        lobe: w.and(both_up, w.and(w.gt(v, zero), finite(w, v))),
         cos_oh,
         pdf: w.select(w.and_not(both_up, w.le(cos_oh, zero)), p, zero),
     }

@@ -727,42 +727,7 @@ impl<const C: bool, const P: bool> WideKernel for Shade<'_, '_, C, P> {
         let wide_x = w.gt(w.copysign(ox, one), w.copysign(oy, one));
         let a = w.select(wide_x, w.div(oy, ox), w.div(ox, oy));
         let t = w.mul(w.splat(PI / 4.0), a);
-        let z = w.mul(t, t);
-        let sin = w.add(
-            w.mul(
-                w.mul(
-                    w.sub(
-                        w.mul(
-                            w.add(w.mul(w.splat(-1.951_529_6e-4), z), w.splat(8.332_161e-3)),
-                            z,
-                        ),
-                        w.splat(1.666_665_5e-1),
-                    ),
-                    z,
-                ),
-                t,
-            ),
-            t,
-        );
-        let cos = w.add(
-            w.sub(
-                w.mul(
-                    w.mul(
-                        w.add(
-                            w.mul(
-                                w.sub(w.mul(w.splat(2.443_315_7e-5), z), w.splat(1.388_731_6e-3)),
-                                z,
-                            ),
-                            w.splat(4.166_664_6e-2),
-                        ),
-                        z,
-                    ),
-                    z,
-                ),
-                w.mul(w.splat(0.5), z),
-            ),
-            one,
-        );
+        let (sin, cos) = microfacet_lanes::sin_cos_quarter(w, t);
         let dx = w.select(wide_x, w.mul(ox, cos), w.mul(oy, sin));
         let dy = w.select(wide_x, w.mul(ox, sin), w.mul(oy, cos));
         let dx = w.select(centre, zero, dx);
@@ -1094,13 +1059,13 @@ fn positive<W: Wide>(w: W, all: W::M, a: W::V) -> W::M {
 
 /// Neither NaN nor infinite.
 #[inline(always)]
-fn finite<W: Wide>(w: W, a: W::V) -> W::M {
+pub(super) fn finite<W: Wide>(w: W, a: W::V) -> W::M {
     w.eq(w.sub(a, a), w.splat(0.0))
 }
 
 /// `a·b` as `Vec3::dot` sums it.
 #[inline(always)]
-fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
+pub(super) fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
     w.add(
         w.add(w.mul(a[0], b[0]), w.mul(a[1], b[1])),
         w.mul(a[2], b[2]),
