@@ -8,7 +8,6 @@
 //! [`crate::sampling::warp::sin_cos_turn`]), so that a lane gets the bits a path gets alone
 //! (the NaN cases of `max` aside, which finite directions never meet). Change both together.
 
-use super::surface_lanes::{dot, finite};
 use crate::math::{INV_PI, PI};
 use crate::simd::Wide;
 
@@ -39,6 +38,21 @@ pub(super) struct Plastic<W: Wide> {
     pub ps: W::V,
     pub ks: [W::V; 4],
     pub kb: [W::V; 4],
+}
+
+/// `a·b` as `Vec3::dot` sums it.
+#[inline(always)]
+pub(super) fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
+    w.add(
+        w.add(w.mul(a[0], b[0]), w.mul(a[1], b[1])),
+        w.mul(a[2], b[2]),
+    )
+}
+
+/// Neither NaN nor infinite.
+#[inline(always)]
+pub(super) fn finite<W: Wide>(w: W, a: W::V) -> W::M {
+    w.eq(w.sub(a, a), w.splat(0.0))
 }
 
 /// `Vec3::normalize`: `v` times 1/|v|.

@@ -24,7 +24,7 @@
 //! and square root, no fused multiply-add; the NaN cases of `max`/`min` aside, which a finite
 //! throughput never meets).
 
-use super::microfacet_lanes::{self, Conductor, Plastic};
+use super::microfacet_lanes::{self, dot, finite, Conductor, Plastic};
 use super::MAX_SHADOWS;
 use crate::light::{LightSample, Target};
 use crate::material::RoughCoating;
@@ -1055,21 +1055,6 @@ fn to_world<W: Wide>(w: W, [s, t, n]: [W::V; 3], x: W::V, y: W::V, z: W::V) -> W
 #[inline(always)]
 fn positive<W: Wide>(w: W, all: W::M, a: W::V) -> W::M {
     w.and_not(all, w.le(a, w.splat(0.0)))
-}
-
-/// Neither NaN nor infinite.
-#[inline(always)]
-pub(super) fn finite<W: Wide>(w: W, a: W::V) -> W::M {
-    w.eq(w.sub(a, a), w.splat(0.0))
-}
-
-/// `a·b` as `Vec3::dot` sums it.
-#[inline(always)]
-pub(super) fn dot<W: Wide>(w: W, a: [W::V; 3], b: [W::V; 3]) -> W::V {
-    w.add(
-        w.add(w.mul(a[0], b[0]), w.mul(a[1], b[1])),
-        w.mul(a[2], b[2]),
-    )
 }
 
 /// `f32::max` for operands that are not NaN.
