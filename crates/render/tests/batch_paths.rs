@@ -171,6 +171,20 @@ fn mixed_scene_with(spectral: bool, sky: bool) -> Scene {
         white,
         Some(checkered),
     );
+    // Sphere lights, sampled in the lanes by the cone they subtend: one-sided (dark from
+    // inside) and two-sided.
+    for (c, r, two_sided) in [
+        ([0.55, -0.55, 0.45], 0.12, false),
+        ([-0.5, 0.65, -0.45], 0.08, true),
+    ] {
+        let e = b.add_emission(Emission {
+            radiance: Texture::Uniform(Rgb::new(6.0, 4.0, 2.5)),
+            two_sided,
+        });
+        let place = Transform::translation(Vec3::new(c[0], c[1], c[2]))
+            * Transform::scaling(Vec3::new(r, r, r));
+        b.add_shape(Shape::Sphere(Sphere::new(place)), white, Some(e));
+    }
     b.add_light(Light::Point(
         PointLight {
             position: Point3::new(0.3, 0.8, 0.5),

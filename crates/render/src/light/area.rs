@@ -239,6 +239,8 @@ impl AreaLight {
             if d2 > r * r * 1.0001 {
                 // Sample the cone of directions the sphere subtends (1 − cos θ_max from
                 // sin²θ_max = r²/d², exact for the tiny cones of small, distant spheres).
+                // (The path tracer's lanes repeat these operations, `SphereSamples` in
+                // `integrator/path/surface_lanes.rs`: change both.)
                 let one_minus_cos = warp::one_minus_cos_from_sin2(r * r / d2);
                 let d = d2.sqrt();
                 let axis = (*c - p) / d;

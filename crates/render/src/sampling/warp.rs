@@ -78,8 +78,8 @@ pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
 pub fn square_to_uniform_hemisphere(u: [f32; 2]) -> Vec3 {
     let z = u[0];
     let r = safe_sqrt(1.0 - z * z);
-    let phi = 2.0 * PI * u[1];
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (sin_phi, cos_phi) = sin_cos_turn(u[1]);
+    Vec3::new(r * cos_phi, r * sin_phi, z)
 }
 
 /// The pdf of [`square_to_uniform_hemisphere`]: 1/(2π).
@@ -93,8 +93,8 @@ pub fn uniform_hemisphere_pdf() -> f32 {
 pub fn square_to_uniform_sphere(u: [f32; 2]) -> Vec3 {
     let z = 1.0 - 2.0 * u[0];
     let r = safe_sqrt(1.0 - z * z);
-    let phi = 2.0 * PI * u[1];
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (sin_phi, cos_phi) = sin_cos_turn(u[1]);
+    Vec3::new(r * cos_phi, r * sin_phi, z)
 }
 
 /// The pdf of [`square_to_uniform_sphere`]: 1/(4π).
@@ -108,8 +108,8 @@ pub fn uniform_sphere_pdf() -> f32 {
 pub fn square_to_uniform_cone(u: [f32; 2], cos_max: f32) -> Vec3 {
     let z = 1.0 - u[0] * (1.0 - cos_max);
     let r = safe_sqrt(1.0 - z * z);
-    let phi = 2.0 * PI * u[1];
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (sin_phi, cos_phi) = sin_cos_turn(u[1]);
+    Vec3::new(r * cos_phi, r * sin_phi, z)
 }
 
 /// The pdf of [`square_to_uniform_cone`]: 1/(2π(1 − cos θ_max)).
@@ -129,14 +129,16 @@ pub fn one_minus_cos_from_sin2(sin2: f32) -> f32 {
 
 /// Uniform direction in the cone around +z whose half-angle θ_max is given by
 /// `one_minus_cos_max` = 1 − cos θ_max (see [`one_minus_cos_from_sin2`]); unlike
-/// [`square_to_uniform_cone`] it stays accurate for tiny cones.
+/// [`square_to_uniform_cone`] it stays accurate for tiny cones. (Like the sphere, hemisphere
+/// and cone warps above, it takes the sine and cosine of φ = 2π·u₁ from [`sin_cos_turn`], so
+/// that the path tracer's lanes repeat a sphere light's sample bit for bit.)
 #[inline]
 pub fn square_to_uniform_cone_narrow(u: [f32; 2], one_minus_cos_max: f32) -> Vec3 {
     // a = 1 − cos θ, uniform in [0, 1 − cos θ_max]; sin θ = √(a(2 − a)) without cancellation.
     let a = u[0] * one_minus_cos_max;
     let r = safe_sqrt(a * (2.0 - a));
-    let phi = 2.0 * PI * u[1];
-    Vec3::new(r * phi.cos(), r * phi.sin(), 1.0 - a)
+    let (sin_phi, cos_phi) = sin_cos_turn(u[1]);
+    Vec3::new(r * cos_phi, r * sin_phi, 1.0 - a)
 }
 
 /// The pdf of [`square_to_uniform_cone_narrow`]: 1/(2π(1 − cos θ_max)).

@@ -654,8 +654,8 @@ impl Path {
         true
     }
 
-    /// [`Path::sample_light`] for a Lambert lane: a parallelogram light of uniform radiance is
-    /// left to [`SurfaceLanes::shade`] to sample; other lights are sampled here.
+    /// [`Path::sample_light`] for a Lambert lane: a parallelogram or a sphere light of uniform
+    /// radiance is left to [`SurfaceLanes::shade`] to sample; other lights are sampled here.
     #[inline(always)]
     fn lane_light<'s>(
         &self,
@@ -681,6 +681,20 @@ impl Path {
                         return LaneLight::Rect {
                             q,
                             inv_area: a.inv_area(),
+                            radiance: &e.radiance,
+                            two_sided: e.two_sided,
+                            u,
+                            pick_pdf,
+                        };
+                    }
+                    // A sphere seen from outside: its cone sample left to the lanes
+                    // (`AreaLight::sample` samples it so from beyond 1.0001 times its radius).
+                    AreaShape::Sphere {
+                        cone: Some((c, r)), ..
+                    } if sp.p.squared_distance(*c) > r * r * 1.0001 => {
+                        return LaneLight::Sphere {
+                            c: *c,
+                            r: *r,
                             radiance: &e.radiance,
                             two_sided: e.two_sided,
                             u,

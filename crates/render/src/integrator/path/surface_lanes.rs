@@ -7,7 +7,10 @@
 //! the light sample with the MIS weight of next-event estimation, the sample of the next
 //! direction, the throughput and Russian roulette. [`SurfaceLanes::shade`] does these for all
 //! such lanes with the sixteen-lane operations of [`crate::simd::Wide`] (the microfacet terms
-//! in `microfacet_lanes.rs`), and [`SurfaceLanes::finish`] makes each lane's rays. A scene
+//! in `microfacet_lanes.rs`), and [`SurfaceLanes::finish`] makes each lane's rays. Lights of
+//! uniform radiance that are parallelograms, faced mesh triangles or spheres seen from outside
+//! are sampled here too (a sphere by the cone it subtends, in a kernel of its own before the
+//! shading one: `AreaLight::sample`'s operations, which it repeats). A scene
 //! that samples every light at each vertex (`super::every_light`) hands over one light sample
 //! per light, each with its own batch of shadow rays.
 //!
@@ -100,6 +103,13 @@ pub(super) struct SurfaceLanes<'s> {
     /// `q_w`, and 1/area is the mesh's.
     rect: u32,
     tri: u32,
+    /// Lanes whose first light is a sphere of uniform radiance seen from outside, sampled
+    /// here by the cone it subtends (`AreaLight::sample`): its centre is in `q_p`, its radius
+    /// in `sphere_r` (and its radiance, numbers, pick probability and sidedness where a
+    /// parallelogram's are). [`SurfaceLanes::shade`] turns them into light samples before
+    /// the kernel.
+    sphere: u32,
+    sphere_r: L,
     q_p: [L; 3],
     q_v: [L; 3],
     q_w: [L; 3],
@@ -212,6 +222,18 @@ pub(super) enum LaneLight<'a> {
         /// The pick's probability.
         pick_pdf: f32,
     },
+    /// A sphere light of uniform radiance whose placement is a similarity, seen from outside
+    /// (beyond 1.0001 times its radius), to sample here by its cone of directions (the other
+    /// fields as for `Rect`).
+    Sphere {
+        /// Its centre and radius.
+        c: Point3,
+        r: f32,
+        radiance: &'a Texture,
+        two_sided: bool,
+        u: [f32; 2],
+        pick_pdf: f32,
+    },
     /// A triangle of a mesh light of uniform radiance (chosen by area with the light's first
     /// number, which `u` holds rescaled), to sample here (the other fields as for `Rect`).
     Tri {
@@ -269,6 +291,7 @@ impl<'s> SurfaceLanes<'s> {
         }
         self.rect &= !bit;
         self.tri &= !bit;
+        self.sphere &= !bit;
         self.two_sided &= !bit;
         // A light sampled here: its three points (a parallelogram's corner and edges, a
         // triangle's corners), unit normal, whether it is a triangle, and what both share.
@@ -320,6 +343,31 @@ impl<'s> SurfaceLanes<'s> {
             set3(&mut self.q_w, i, points[2]);
             set3(&mut l.n, i, n.to_vec());
             self.inv_area[i] = inv_area;
+            let uv = Point2::new(0.0, 0.0);
+            put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
+            self.u_light[0][i] = u[0];
+            self.u_light[1][i] = u[1];
+            self.pick_pdf[i] = pick_pdf;
+        } else if let LaneLight::Sphere {
+            c,
+            r,
+            radiance,
+            two_sided,
+            u,
+            pick_pdf,
+        } = v.light
+        {
+            let l = &mut self.lights[0];
+            l.light &= !bit;
+            l.delta &= !bit;
+            l.to_surface &= !bit;
+            l.to_point &= !bit;
+            self.sphere |= bit;
+            if two_sided {
+                self.two_sided |= bit;
+            }
+            set3(&mut self.q_p, i, c.to_vec());
+            self.sphere_r[i] = r;
             let uv = Point2::new(0.0, 0.0);
             put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
             self.u_light[0][i] = u[0];
@@ -461,6 +509,7 @@ impl<'s> SurfaceLanes<'s> {
             &mut self.flip,
             &mut self.rect,
             &mut self.tri,
+            &mut self.sphere,
             &mut self.two_sided,
             &mut self.roulette,
             &mut self.ggx,
@@ -478,6 +527,17 @@ impl<'s> SurfaceLanes<'s> {
             ] {
                 *mask &= m;
             }
+        }
+        // Sphere lights' samples first, in a kernel of their own (their code kept out of the
+        // shading kernel, whose variants it would slow: see `Shade`): then they are light
+        // samples like any other.
+        if self.sphere != 0 {
+            let usable = crate::simd::run_wide_at(level, SphereSamples(self));
+
+            let l = &mut self.lights[0];
+            l.to_surface |= usable;
+            l.light |= usable;
+            self.sphere = 0;
         }
         // Lambert lanes alone take a kernel compiled without the other models: with them in,
         // the compiler computes parts of their terms ahead of the tests that skip them, and
@@ -540,6 +600,102 @@ fn put_texture(a: &mut [L; 4], i: usize, t: &Texture, uv: Point2, w: &Wavelength
     let s = t.spectral(uv, w, role);
     for k in 0..4 {
         a[k][i] = s.0[k];
+    }
+}
+
+/// The samples of the sphere lights of a step's lanes (`SurfaceLanes::sphere`), into their
+/// first light's direction, radiance, density (with the pick's probability), point and
+/// normal: `AreaLight::sample`'s cone sample, operation for operation (with
+/// `warp::one_minus_cos_from_sin2`, `Frame::from_normal`, `warp::square_to_uniform_cone_narrow`
+/// and `Emission::radiance_at`). Returns the lanes whose sample is usable
+/// (`LightSample::usable`).
+struct SphereSamples<'a, 's>(&'a mut SurfaceLanes<'s>);
+
+impl WideKernel for SphereSamples<'_, '_> {
+    type Output = u32;
+
+    #[inline(always)]
+    fn run<W: Wide>(self, w: W) -> u32 {
+        let x = self.0;
+        let on = w.mask(x.sphere);
+        let (zero, one, two) = (w.splat(0.0), w.splat(1.0), w.splat(2.0));
+        let p = load3(w, &x.p_x);
+        let c = load3(w, &x.q_p);
+        let r = w.load(&x.sphere_r);
+        let (u0, u1) = (w.load(&x.u_light[0]), w.load(&x.u_light[1]));
+        let pc = [w.sub(p[0], c[0]), w.sub(p[1], c[1]), w.sub(p[2], c[2])];
+        let d2 = dot(w, pc, pc);
+        let rr = w.mul(r, r);
+        // 1 − cos θ_max from sin²θ_max = r²/d², clamped to [0, 1].
+        let s = w.div(rr, d2);
+        let s = w.select(w.lt(s, zero), zero, s);
+        let s = w.select(w.gt(s, one), one, s);
+        let one_minus_cos = w.div(s, w.add(one, w.sqrt(w.sub(one, s))));
+        let d = w.sqrt(d2);
+        let inv_d = w.div(one, d);
+        let axis = [
+            w.mul(w.sub(c[0], p[0]), inv_d),
+            w.mul(w.sub(c[1], p[1]), inv_d),
+            w.mul(w.sub(c[2], p[2]), inv_d),
+        ];
+        // The frame about the axis.
+        let sign = w.copysign(one, axis[2]);
+        let a = w.div(w.splat(-1.0), w.add(sign, axis[2]));
+        let b = w.mul(w.mul(axis[0], axis[1]), a);
+        let fs = [
+            w.add(one, w.mul(w.mul(w.mul(sign, axis[0]), axis[0]), a)),
+            w.mul(sign, b),
+            w.mul(w.neg(sign), axis[0]),
+        ];
+        let ft = [
+            b,
+            w.add(sign, w.mul(w.mul(axis[1], axis[1]), a)),
+            w.neg(axis[1]),
+        ];
+        // The direction, uniform in the cone (a = 1 − cos θ).
+        let a = w.mul(u0, one_minus_cos);
+        let a2 = w.mul(a, w.sub(two, a));
+        let rad = w.sqrt(w.select(w.lt(a2, zero), zero, a2));
+        let (sin_phi, cos_phi) = microfacet_lanes::sin_cos_turn(w, u1);
+        let local = [w.mul(rad, cos_phi), w.mul(rad, sin_phi), w.sub(one, a)];
+        let mut wi = [zero; 3];
+        for k in 0..3 {
+            wi[k] = w.add(
+                w.add(w.mul(fs[k], local[0]), w.mul(ft[k], local[1])),
+                w.mul(axis[k], local[2]),
+            );
+        }
+        // Where it meets the sphere, and the normal there.
+        let h2 = w.mul(d2, a2);
+        let under = w.sub(rr, h2);
+        let t = w.sub(
+            w.mul(d, w.sub(one, a)),
+            w.sqrt(w.select(w.lt(under, zero), zero, under)),
+        );
+        let inv_r = w.div(one, r);
+        let l = &mut x.lights[0];
+        let mut n = [zero; 3];
+        let mut wi_finite = on;
+        for k in 0..3 {
+            n[k] = w.mul(w.sub(w.add(p[k], w.mul(wi[k], t)), c[k]), inv_r);
+            let q = w.add(c[k], w.mul(n[k], r));
+            put(w, on, q, &mut l.at[k]);
+            put(w, on, n[k], &mut l.n[k]);
+            put(w, on, wi[k], &mut l.wi[k]);
+            wi_finite = w.and(wi_finite, finite(w, wi[k]));
+        }
+        // The radiance towards the point (none from behind a one-sided light).
+        let back = w.le(dot(w, n, [w.neg(wi[0]), w.neg(wi[1]), w.neg(wi[2])]), zero);
+        let dark = w.and_not(back, w.mask(x.two_sided));
+        let mut lit = w.mask(0);
+        for k in 0..4 {
+            let v = w.select(dark, zero, w.load(&l.li[k]));
+            lit = w.or(lit, w.ne(v, zero));
+            put(w, on, v, &mut l.li[k]);
+        }
+        let pdf = w.div(one, w.mul(w.splat(2.0 * PI), one_minus_cos));
+        put(w, on, w.mul(w.load(&x.pick_pdf), pdf), &mut l.pdf);
+        w.bits(w.and(w.and(wi_finite, lit), w.gt(pdf, zero)))
     }
 }
 
@@ -1286,5 +1442,107 @@ mod tests {
         }
         // Every kind of outcome was compared.
         assert!(seen.iter().all(|&k| k > 20), "{seen:?}");
+    }
+
+    /// The lanes' sphere-light samples are `AreaLight::sample`'s, bit for bit, at every
+    /// instruction set: one-sided and two-sided spheres seen from near and far, the light's
+    /// usable samples (and only those) kept, with the pick's probability in the density.
+    #[test]
+    fn sphere_light_samples_are_the_lights_own() {
+        use crate::light::{AreaLight, AreaShape, Emission};
+        use crate::math::Transform;
+        use crate::shape::Sphere;
+        let radiance = Texture::Uniform(crate::color::Rgb::new(6.0, 4.0, 2.5));
+        let geometry = crate::geometry::Geometry::default();
+        let supported = SimdLevel::supported();
+        let mut rng = Pcg32::new(5, 7);
+        let mut seen = [0usize; 2];
+        for round in 0..200u64 {
+            let two_sided = round % 2 == 1;
+            let emissions = [Emission {
+                radiance: radiance.clone(),
+                two_sided,
+            }];
+            let r = 0.01 + rng.next_f32() * 0.3;
+            let c = Vec3::new(
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+                rng.next_f32() - 0.5,
+            );
+            let place = Transform::translation(c) * Transform::scaling(Vec3::new(r, r, r));
+            let light = AreaLight::sphere(Sphere::new(place), 0);
+            let AreaShape::Sphere {
+                cone: Some((c, r)), ..
+            } = light.shape
+            else {
+                panic!("a round sphere samples its cone");
+            };
+            for level in [SimdLevel::Sse, SimdLevel::Avx2, SimdLevel::Avx512] {
+                if level > supported {
+                    continue;
+                }
+                let mut lanes = SurfaceLanes::default();
+                let mut want = Vec::new();
+                let mut rng = Pcg32::new(round, 11);
+                for i in 0..BATCH {
+                    // Points from just outside the sphere to far away.
+                    let dir = Vec3::new(
+                        rng.next_f32() - 0.5,
+                        rng.next_f32() - 0.5,
+                        rng.next_f32() - 0.5,
+                    );
+                    let p = c + dir.normalize() * (r * 1.001 + rng.next_f32().powi(3) * 50.0);
+                    let u = [rng.next_f32(), rng.next_f32()];
+                    let pick_pdf = rng.next_f32();
+                    let ls = light
+                        .sample(&geometry, &emissions, p, u, &Wavelengths::Rgb)
+                        .filter(|s| s.pdf > 0.0 && s.wi.is_finite() && !s.li.is_black());
+                    want.push(ls.map(|s| (s, pick_pdf)));
+                    let vertex = LaneVertex {
+                        p,
+                        ng: Vec3::Z.to_normal(),
+                        frame: Frame::from_normal(Vec3::Z.to_normal()),
+                        wo_z: 0.5,
+                        flip: false,
+                        reflectance: &radiance,
+                        uv: Point2::new(0.0, 0.0),
+                        lambda: &Wavelengths::Rgb,
+                        beta: SampledSpectrum([1.0; 4]),
+                        light: LaneLight::Sphere {
+                            c,
+                            r,
+                            radiance: &radiance,
+                            two_sided,
+                            u,
+                            pick_pdf,
+                        },
+                        u2: [0.5, 0.5],
+                        u_rr: None,
+                        eta_scale: 1.0,
+                    };
+                    lanes.set(i, &vertex);
+                }
+                let usable = crate::simd::run_wide_at(level, SphereSamples(&mut lanes));
+                let l = &lanes.lights[0];
+                for (i, want) in want.iter().enumerate() {
+                    assert_eq!(usable >> i & 1 == 1, want.is_some(), "{level:?} lane {i}");
+                    let Some((s, pick_pdf)) = want else { continue };
+                    seen[two_sided as usize] += 1;
+                    let Target::Surface(q, n) = s.target else {
+                        panic!("a point on the sphere");
+                    };
+                    let bits = |v: [f32; 3]| v.map(f32::to_bits);
+                    let lane = |a: &[L; 3]| bits([a[0][i], a[1][i], a[2][i]]);
+                    assert_eq!(lane(&l.wi), bits([s.wi.x, s.wi.y, s.wi.z]), "{level:?}");
+                    assert_eq!(lane(&l.at), bits([q.x, q.y, q.z]), "{level:?}");
+                    assert_eq!(lane(&l.n), bits([n.x, n.y, n.z]), "{level:?}");
+                    assert_eq!(l.pdf[i].to_bits(), (pick_pdf * s.pdf).to_bits());
+                    for k in 0..4 {
+                        assert_eq!(l.li[k][i].to_bits(), s.li.0[k].to_bits());
+                    }
+                }
+            }
+        }
+        assert!(seen.iter().all(|&k| k > 1000), "{seen:?}");
     }
 }
