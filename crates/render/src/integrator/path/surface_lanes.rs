@@ -533,7 +533,6 @@ impl<'s> SurfaceLanes<'s> {
         // samples like any other.
         if self.sphere != 0 {
             let usable = crate::simd::run_wide_at(level, SphereSamples(self));
-
             let l = &mut self.lights[0];
             l.to_surface |= usable;
             l.light |= usable;
