@@ -154,6 +154,25 @@ struct LightLanes {
     c: [L; 4],
 }
 
+impl LightLanes {
+    /// Lane `bit` without a light sample (until one is put in).
+    #[inline(always)]
+    fn clear(&mut self, bit: u32) {
+        self.light &= !bit;
+        self.delta &= !bit;
+        self.to_surface &= !bit;
+        self.to_point &= !bit;
+    }
+}
+
+/// The shape of a light sampled in the lanes ([`SurfaceLanes::set`]): three points (a
+/// parallelogram's corner and edges, or a triangle's corners, then `true`) with the unit
+/// normal and 1/area, or a sphere's centre and radius.
+enum Here {
+    Points([Vec3; 3], Normal3, bool, f32),
+    Sphere(Point3, f32),
+}
+
 /// What the scalar part of a vertex hands over for one Lambert lane.
 pub(super) struct LaneVertex<'a> {
     /// The hit point and its (unit) geometric normal.
@@ -293,9 +312,9 @@ impl<'s> SurfaceLanes<'s> {
         self.tri &= !bit;
         self.sphere &= !bit;
         self.two_sided &= !bit;
-        // A light sampled here: its three points (a parallelogram's corner and edges, a
-        // triangle's corners), unit normal, whether it is a triangle, and what both share.
-        let shape = match v.light {
+        // A light sampled here: its shape (a parallelogram's corner and edges or a triangle's
+        // corners, with the unit normal; a sphere's centre and radius) and what all share.
+        let here = match v.light {
             LaneLight::Rect {
                 q,
                 inv_area,
@@ -304,10 +323,8 @@ impl<'s> SurfaceLanes<'s> {
                 u,
                 pick_pdf,
             } => Some((
-                [q.p.to_vec(), q.v, q.w],
-                q.normal(),
-                false,
-                (inv_area, radiance, two_sided, u, pick_pdf),
+                Here::Points([q.p.to_vec(), q.v, q.w], q.normal(), false, inv_area),
+                (radiance, two_sided, u, pick_pdf),
             )),
             LaneLight::Tri {
                 corners,
@@ -318,56 +335,43 @@ impl<'s> SurfaceLanes<'s> {
                 u,
                 pick_pdf,
             } => Some((
-                corners.map(|c| c.to_vec()),
-                n,
-                true,
-                (inv_area, radiance, two_sided, u, pick_pdf),
+                Here::Points(corners.map(|c| c.to_vec()), n, true, inv_area),
+                (radiance, two_sided, u, pick_pdf),
             )),
+            LaneLight::Sphere {
+                c,
+                r,
+                radiance,
+                two_sided,
+                u,
+                pick_pdf,
+            } => Some((Here::Sphere(c, r), (radiance, two_sided, u, pick_pdf))),
             _ => None,
         };
-        if let Some((points, n, tri, (inv_area, radiance, two_sided, u, pick_pdf))) = shape {
+        if let Some((shape, (radiance, two_sided, u, pick_pdf))) = here {
             let l = &mut self.lights[0];
-            l.light &= !bit;
-            l.delta &= !bit;
-            l.to_surface &= !bit;
-            l.to_point &= !bit;
-            self.rect |= bit;
-            if tri {
-                self.tri |= bit;
+            l.clear(bit);
+            match shape {
+                Here::Points(points, n, tri, inv_area) => {
+                    self.rect |= bit;
+                    if tri {
+                        self.tri |= bit;
+                    }
+                    set3(&mut self.q_p, i, points[0]);
+                    set3(&mut self.q_v, i, points[1]);
+                    set3(&mut self.q_w, i, points[2]);
+                    set3(&mut l.n, i, n.to_vec());
+                    self.inv_area[i] = inv_area;
+                }
+                Here::Sphere(c, r) => {
+                    self.sphere |= bit;
+                    set3(&mut self.q_p, i, c.to_vec());
+                    self.sphere_r[i] = r;
+                }
             }
             if two_sided {
                 self.two_sided |= bit;
             }
-            set3(&mut self.q_p, i, points[0]);
-            set3(&mut self.q_v, i, points[1]);
-            set3(&mut self.q_w, i, points[2]);
-            set3(&mut l.n, i, n.to_vec());
-            self.inv_area[i] = inv_area;
-            let uv = Point2::new(0.0, 0.0);
-            put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
-            self.u_light[0][i] = u[0];
-            self.u_light[1][i] = u[1];
-            self.pick_pdf[i] = pick_pdf;
-        } else if let LaneLight::Sphere {
-            c,
-            r,
-            radiance,
-            two_sided,
-            u,
-            pick_pdf,
-        } = v.light
-        {
-            let l = &mut self.lights[0];
-            l.light &= !bit;
-            l.delta &= !bit;
-            l.to_surface &= !bit;
-            l.to_point &= !bit;
-            self.sphere |= bit;
-            if two_sided {
-                self.two_sided |= bit;
-            }
-            set3(&mut self.q_p, i, c.to_vec());
-            self.sphere_r[i] = r;
             let uv = Point2::new(0.0, 0.0);
             put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
             self.u_light[0][i] = u[0];
@@ -450,10 +454,7 @@ impl<'s> SurfaceLanes<'s> {
     ) {
         let bit = 1u32 << i;
         let l = &mut self.lights[k];
-        l.light &= !bit;
-        l.delta &= !bit;
-        l.to_surface &= !bit;
-        l.to_point &= !bit;
+        l.clear(bit);
         if let Some(ls) = ls {
             l.light |= bit;
             if ls.delta {
