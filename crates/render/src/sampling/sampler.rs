@@ -624,11 +624,67 @@ impl crate::simd::Kernel for CmjBatch<'_> {
                 );
             }
         } else {
-            for (k, o) in self.out.iter_mut().enumerate() {
-                *o = cmj(self.first.wrapping_add(k as u32) % n, n, p);
+            // Sixteen points at a time, each step a loop over the lanes that compiles to
+            // vector code: the cycle walks run until every lane has left them.
+            let m = ((n as f32).sqrt() as u32).max(1);
+            let nn = n.div_ceil(m);
+            let (inv_n, inv_m) = (1.0 / n as f64, 1.0 / m as f64);
+            for (b, out) in self.out.chunks_mut(CMJ_LANES).enumerate() {
+                let base = self.first.wrapping_add((b * CMJ_LANES) as u32);
+                let idx: [u32; CMJ_LANES] =
+                    std::array::from_fn(|k| div_rem(base.wrapping_add(k as u32), n, inv_n).1);
+                let s = permute_lanes(idx, n, p.wrapping_mul(0x51633e2d));
+                let (sy_in, sx_in) = {
+                    let qr: [(u32, u32); CMJ_LANES] =
+                        std::array::from_fn(|k| div_rem(s[k], m, inv_m));
+                    (qr.map(|x| x.0), qr.map(|x| x.1))
+                };
+                let sx = permute_lanes(sx_in, m, p.wrapping_mul(0x68bc21eb));
+                let sy = permute_lanes(sy_in, nn, p.wrapping_mul(0x02e5be93));
+                for (k, o) in out.iter_mut().enumerate() {
+                    *o = cmj_point(s[k], n, (m, nn), (sx[k], sy[k]), p);
+                }
             }
         }
     }
+}
+
+/// Points [`CmjBatch`] computes side by side for counts other than powers of two.
+const CMJ_LANES: usize = 16;
+
+/// `(x / d, x % d)` (d > 0) without an integer division, so that a loop over lanes
+/// vectorises: the quotient as x times `inv`, d's reciprocal in f64 (within one of the
+/// quotient for every u32 x and d), then corrected.
+#[inline(always)]
+fn div_rem(x: u32, d: u32, inv: f64) -> (u32, u32) {
+    let mut q = (x as f64 * inv) as u32;
+    if q as u64 * d as u64 > x as u64 {
+        q -= 1;
+    } else if (q as u64 + 1) * d as u64 <= x as u64 {
+        q += 1;
+    }
+    (q, x - q * d)
+}
+
+/// [`permute`] on sixteen elements of `[0, l)` at once (the same elements, bit for bit): each
+/// lane's cycle walk stops where its own would, the others going on.
+#[inline(always)]
+fn permute_lanes(i: [u32; CMJ_LANES], l: u32, p: u32) -> [u32; CMJ_LANES] {
+    let mut w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let mut v = i.map(|x| permute_round(x, w, p));
+    while v.iter().any(|&x| x >= l) {
+        for x in &mut v {
+            let r = permute_round(*x, w, p);
+            *x = if *x >= l { r } else { *x };
+        }
+    }
+    let inv = 1.0 / l as f64;
+    v.map(|x| div_rem(x.wrapping_add(p), l, inv).1)
 }
 
 /// The pattern seed of a correlated multi-jittered dimension `dim` of a Sobol pixel sampler
@@ -773,6 +829,12 @@ fn cmj_grid(
     let s = perm(s % n, n, p.wrapping_mul(0x51633e2d));
     let sx = perm(s % m, m, p.wrapping_mul(0x68bc21eb));
     let sy = perm(s / m, nn, p.wrapping_mul(0x02e5be93));
+    cmj_point(s, n, (m, nn), (sx, sy), p)
+}
+
+/// The point of [`cmj_grid`] from its permuted index `s` and its column and row `(sx, sy)`.
+#[inline(always)]
+fn cmj_point(s: u32, n: u32, (m, nn): (u32, u32), (sx, sy): (u32, u32), p: u32) -> [f32; 2] {
     let jx = randfloat(s, p.wrapping_mul(0x967a889b));
     let jy = randfloat(s, p.wrapping_mul(0x368cc8b7));
     let x = (sx as f32 + (sy as f32 + jx) / nn as f32) / m as f32;
@@ -963,6 +1025,31 @@ mod tests {
         }
     }
 
+    /// The division without a division is the division, at the ends of the range too.
+    #[test]
+    fn div_rem_divides() {
+        let mut rng = Pcg32::new(8, 2);
+        let ds = [
+            1u32,
+            2,
+            3,
+            7,
+            10,
+            100,
+            255,
+            65_537,
+            1 << 31,
+            u32::MAX - 1,
+            u32::MAX,
+        ];
+        for &d in &ds {
+            let xs = [0, 1, d - 1, d, d.wrapping_add(1), u32::MAX, u32::MAX - 1];
+            for x in xs.into_iter().chain((0..2000).map(|_| rng.next_u32())) {
+                assert_eq!(div_rem(x, d, 1.0 / d as f64), (x / d, x % d), "{x} / {d}");
+            }
+        }
+    }
+
     /// Kensler's pattern through the loop-free permutation is the general one, bit for bit,
     /// for every power-of-four count (and `permute_pow2` is `permute` for powers of two).
     #[test]
@@ -1102,7 +1189,7 @@ mod tests {
             }
         }
         // The multi-jittered tables too, for square, other power-of-two and other counts.
-        for spp in [32u32, 64, 100, 128] {
+        for spp in [7u32, 32, 64, 100, 128, 200] {
             let pattern = cmj_pattern(seed, 5);
             let first = 0x1234_5640;
             let want: Vec<[f32; 2]> = (0..CHUNK as u32)
