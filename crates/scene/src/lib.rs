@@ -17,6 +17,7 @@ pub mod load;
 pub mod loaded;
 pub mod mesh;
 pub mod mitsuba;
+mod ply_binary;
 pub mod serialized;
 
 pub use error::{Pos, SceneError, SourceFile};

@@ -1,5 +1,7 @@
-//! Triangle meshes from Wavefront OBJ (through `tobj`) and PLY (ASCII and binary, through
-//! `ply-rs-bw`), loaded into candela's mesh layout: one array per attribute, in world space.
+//! Triangle meshes from Wavefront OBJ (through `tobj`) and PLY (ASCII and binary: the header
+//! through `ply-rs-bw`, an ASCII payload through its element parser, a binary one read straight
+//! into the mesh by `ply_binary`), loaded into candela's mesh layout: one array per attribute, in
+//! world space.
 //!
 //! Polygons are split into fans of triangles. Vertex normals and texture coordinates are kept
 //! when every vertex has them. OBJ texture coordinates are flipped in v (OBJ's v grows upwards,
@@ -126,7 +128,7 @@ pub fn load_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, String> {
 }
 
 /// Appends a triangle unless two of its indices coincide.
-fn push_triangle(mesh: &mut Mesh, t: [u32; 3]) {
+pub(crate) fn push_triangle(mesh: &mut Mesh, t: [u32; 3]) {
     if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
         mesh.indices.push(t);
     }
@@ -234,8 +236,15 @@ impl PropertyAccess for PlyFace {
     }
 }
 
-/// Parses a PLY file held in memory (`path` names it in messages).
+/// Parses a PLY file held in memory (`path` names it in messages). A binary payload is read
+/// straight into the mesh (`ply_binary`), an ASCII one through `ply-rs-bw`'s element parser.
 pub fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh, String> {
+    load_ply_with(path, bytes, true)
+}
+
+/// [`load_ply`], the binary payload read by `ply_binary` when `fast`, else by the element
+/// parser as ASCII is (the tests compare the two).
+fn load_ply_with(path: &Path, bytes: &[u8], fast: bool) -> Result<Mesh, String> {
     let file_len = bytes.len() as u64;
     let mut reader = Reader::new(std::io::Cursor::new(bytes));
     let vparser = Parser::<PlyVertex>::new();
@@ -243,8 +252,6 @@ pub fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh, String> {
     let header = vparser
         .read_header(&mut reader)
         .map_err(|e| read_error(path, e))?;
-    let mut vertices: Vec<PlyVertex> = Vec::new();
-    let mut faces: Vec<PlyFace> = Vec::new();
     for (name, def) in &header.elements {
         // Every element takes at least one byte (binary) or one character (ASCII).
         if def.count as u64 > file_len {
@@ -254,6 +261,20 @@ pub fn load_ply(path: &Path, bytes: &[u8]) -> Result<Mesh, String> {
                 def.count
             ));
         }
+    }
+    if fast && header.encoding != ply_rs_bw::ply::Encoding::Ascii {
+        let at = (reader.get_ref().position() as usize).min(bytes.len());
+        return crate::ply_binary::read(&header, &bytes[at..]).map_err(|e| match e {
+            None => read_error(
+                path,
+                "the file ends before the elements its header announces",
+            ),
+            Some(m) => format!("'{}': {m}", path.display()),
+        });
+    }
+    let mut vertices: Vec<PlyVertex> = Vec::new();
+    let mut faces: Vec<PlyFace> = Vec::new();
+    for (name, def) in &header.elements {
         match name.as_str() {
             "vertex" => {
                 vertices = vparser
@@ -394,6 +415,131 @@ mod tests {
         }
         assert_eq!(a.indices, vec![[0, 1, 2], [0, 2, 3]]);
         assert_eq!(a.normals.len(), 4);
+    }
+
+    /// A binary PLY of mixed property types, with properties and elements candela does not
+    /// read (a colour, a vertex list, an edge element), texture coordinates under another name,
+    /// faces of three to five corners (one degenerate), the face element first when
+    /// `faces_first`; little- or big-endian.
+    fn mixed_ply(le: bool, faces_first: bool) -> Vec<u8> {
+        let vertex_def = "element vertex 5\nproperty double x\nproperty float y\nproperty short z\nproperty uchar red\nproperty float nx\nproperty float ny\nproperty float nz\nproperty list uchar float junk\nproperty float texture_u\nproperty float texture_v\n";
+        let face_def =
+            "element face 4\nproperty uchar flags\nproperty list uchar uint vertex_indices\n";
+        let edge_def = "element edge 2\nproperty int a\nproperty list ushort int b\n";
+        let fmt = if le {
+            "binary_little_endian"
+        } else {
+            "binary_big_endian"
+        };
+        let (first, second) = if faces_first {
+            (face_def, vertex_def)
+        } else {
+            (vertex_def, face_def)
+        };
+        let header = format!("ply\nformat {fmt} 1.0\n{first}{edge_def}{second}end_header\n");
+        let mut b = header.into_bytes();
+        // A value from its little-endian bytes, in the file's order.
+        let put = |b: &mut Vec<u8>, mut x: Vec<u8>| {
+            if !le {
+                x.reverse();
+            }
+            b.extend(x);
+        };
+        let vertices = |b: &mut Vec<u8>| {
+            for k in 0..5u8 {
+                put(b, (0.1f64 * k as f64 + 1e-9).to_le_bytes().to_vec());
+                put(b, (k as f32 * 0.25).to_le_bytes().to_vec());
+                put(b, (-(k as i16)).to_le_bytes().to_vec());
+                b.push(200 + k);
+                for n in [0.0f32, 0.6, 0.8] {
+                    put(b, n.to_le_bytes().to_vec());
+                }
+                b.push(k % 3);
+                for j in 0..k % 3 {
+                    put(b, (j as f32).to_le_bytes().to_vec());
+                }
+                put(b, (k as f32 / 4.0).to_le_bytes().to_vec());
+                put(b, (1.0f32 - k as f32 / 8.0).to_le_bytes().to_vec());
+            }
+        };
+        let faces = |b: &mut Vec<u8>| {
+            for f in [
+                &[0u32, 1, 2][..],
+                &[0, 2, 3, 4],
+                &[1, 1, 2],
+                &[4, 3, 2, 1, 0],
+            ] {
+                b.push(7);
+                b.push(f.len() as u8);
+                for &i in f {
+                    put(b, i.to_le_bytes().to_vec());
+                }
+            }
+        };
+        if faces_first {
+            faces(&mut b);
+        } else {
+            vertices(&mut b);
+        }
+        for e in 0..2i32 {
+            put(&mut b, e.to_le_bytes().to_vec());
+            put(&mut b, (e as u16).to_le_bytes().to_vec());
+            for j in 0..e {
+                put(&mut b, j.to_le_bytes().to_vec());
+            }
+        }
+        if faces_first {
+            vertices(&mut b);
+        } else {
+            faces(&mut b);
+        }
+        b
+    }
+
+    /// A binary payload read straight into the mesh gives the element parser's mesh, value
+    /// for value; a file cut anywhere is an error from both, never a panic; a bad index is
+    /// reported the same way.
+    #[test]
+    fn binary_payloads_read_directly_are_the_element_parsers() {
+        let path = Path::new("mixed.ply");
+        for le in [true, false] {
+            for faces_first in [false, true] {
+                let b = mixed_ply(le, faces_first);
+                let fast = load_ply_with(path, &b, true).unwrap();
+                let general = load_ply_with(path, &b, false).unwrap();
+                assert_eq!(fast, general, "{le} {faces_first}");
+                assert_eq!(fast.positions.len(), 5);
+                assert_eq!((fast.normals.len(), fast.uvs.len()), (5, 5));
+                // 1 + 2 + 0 (degenerate) + 3 triangles.
+                assert_eq!(fast.indices.len(), 6);
+                let header_end = b.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+                for cut in header_end..b.len() {
+                    let e = load_ply_with(path, &b[..cut], true).unwrap_err();
+                    assert!(e.contains("mixed.ply"), "{e}");
+                    assert!(load_ply_with(path, &b[..cut], false).is_err(), "{cut}");
+                }
+            }
+        }
+        // An index past the vertices.
+        let mut b = mixed_ply(true, false);
+        let last = b.len() - 4;
+        b[last..].copy_from_slice(&9u32.to_le_bytes());
+        for fast in [true, false] {
+            let e = load_ply_with(path, &b, fast).unwrap_err();
+            assert!(e.contains("does not exist"), "{e}");
+        }
+        // The bench's meshes, when they have been made (bench/make-meshes.py).
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../bench/meshes");
+        for name in ["knot.ply", "blob.ply"] {
+            if let Ok(b) = std::fs::read(dir.join(name)) {
+                let p = Path::new(name);
+                assert_eq!(
+                    load_ply_with(p, &b, true),
+                    load_ply_with(p, &b, false),
+                    "{name}"
+                );
+            }
+        }
     }
 
     #[test]
