@@ -542,6 +542,38 @@ mod tests {
         }
     }
 
+    /// Random corruptions of a binary file's payload (counts, values, indices) never make the
+    /// direct reader panic, and it gives a mesh exactly when the element parser does: the same
+    /// one.
+    #[test]
+    fn corrupted_binary_payloads_never_panic() {
+        let path = Path::new("corrupt.ply");
+        let mut rng = candela_render::sampling::Pcg32::new(11, 3);
+        for le in [true, false] {
+            let clean = mixed_ply(le, false);
+            let start = clean
+                .windows(11)
+                .position(|w| w == b"end_header\n")
+                .unwrap()
+                + 11;
+            for _ in 0..3000 {
+                let mut b = clean.clone();
+                for _ in 0..1 + rng.next_u32() % 4 {
+                    let at = start + (rng.next_u32() as usize) % (b.len() - start);
+                    b[at] = rng.next_u32() as u8;
+                }
+                let (fast, general) = (
+                    load_ply_with(path, &b, true),
+                    load_ply_with(path, &b, false),
+                );
+                assert_eq!(fast.is_ok(), general.is_ok(), "{fast:?} {general:?}");
+                if fast.is_ok() {
+                    assert_eq!(fast, general);
+                }
+            }
+        }
+    }
+
     #[test]
     fn bad_files_are_errors_not_panics() {
         let missing = load_mesh(
