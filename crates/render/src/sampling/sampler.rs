@@ -670,12 +670,7 @@ fn div_rem(x: u32, d: u32, inv: f64) -> (u32, u32) {
 /// lane's cycle walk stops where its own would, the others going on.
 #[inline(always)]
 fn permute_lanes(i: [u32; CMJ_LANES], l: u32, p: u32) -> [u32; CMJ_LANES] {
-    let mut w = l - 1;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
+    let w = walk_mask(l);
     let mut v = i.map(|x| permute_round(x, w, p));
     while v.iter().any(|&x| x >= l) {
         for x in &mut v {
@@ -740,12 +735,7 @@ fn to_unit(x: u32) -> f32 {
 
 /// Kensler's hash-based permutation of `[0, l)`: element `i` of permutation `p`.
 fn permute(mut i: u32, l: u32, p: u32) -> u32 {
-    let mut w = l - 1;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
+    let w = walk_mask(l);
     loop {
         i = permute_round(i, w, p);
         if i < l {
@@ -753,6 +743,17 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
         }
     }
     (i.wrapping_add(p)) % l
+}
+
+/// The mask of [`permute`]'s cycle walk over `[0, l)`: all ones below l − 1's top bit and at it.
+#[inline(always)]
+fn walk_mask(l: u32) -> u32 {
+    let mut w = l - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w | w >> 16
 }
 
 /// [`permute`] for `l` a power of two: its first round always lands in `[0, l)` then (the
@@ -804,9 +805,9 @@ fn randfloat(mut i: u32, p: u32) -> f32 {
 /// Correlated multi-jittered sample `s` of `n` with pattern `p` (Kensler 2013, "Correlated
 /// Multi-Jittered Sampling"). A power of two takes the grid of m × n/m cells with m the power of
 /// two nearest √n from below (8 × 8 for 64, 8 × 16 for 128: one point per cell, row and
-/// column), whose permutations need no cycle walk, so that a pixel's points are computed many
-/// lanes at a time ([`CmjBatch`]); other counts take the aspect-ratio-1 grid of m × ⌈n/m⌉ cells,
-/// m = ⌊√n⌋. (At 32 and 128 spp, the 5 × 7 and 11 × 12 grids' cycle walks took 14 % of a
+/// column), whose permutations need no cycle walk, so that the sampler's tables compute a
+/// pixel's points many lanes at a time; other counts take the aspect-ratio-1 grid of m × ⌈n/m⌉
+/// cells, m = ⌊√n⌋. (At 32 and 128 spp, the 5 × 7 and 11 × 12 grids' cycle walks took 14 % of a
 /// Cornell box frame, one point at a time.)
 pub fn cmj(s: u32, n: u32, p: u32) -> [f32; 2] {
     if let Some(m) = power_of_two_columns(n) {
@@ -1079,7 +1080,8 @@ mod tests {
 
     /// After [`Sampler::mark_path_start`], the pair three dimensions on is Kensler's pattern:
     /// the same from the tables as computed directly (samples in any order), stratified as
-    /// CMJ is (one point per row, per column and per √n × √n cell), and the other dimensions
+    /// CMJ is (one point per row; for a power of two, one per column and per cell of the
+    /// m × n/m grid too), and the other dimensions
     /// are the Sobol ones still.
     #[test]
     fn the_first_direction_pair_is_multi_jittered() {
