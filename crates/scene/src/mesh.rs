@@ -128,7 +128,7 @@ pub fn load_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, String> {
 }
 
 /// Appends a triangle unless two of its indices coincide.
-pub(crate) fn push_triangle(mesh: &mut Mesh, t: [u32; 3]) {
+fn push_triangle(mesh: &mut Mesh, t: [u32; 3]) {
     if t[0] != t[1] && t[1] != t[2] && t[0] != t[2] {
         mesh.indices.push(t);
     }
@@ -264,13 +264,14 @@ fn load_ply_with(path: &Path, bytes: &[u8], fast: bool) -> Result<Mesh, String> 
     }
     if fast && header.encoding != ply_rs_bw::ply::Encoding::Ascii {
         let at = (reader.get_ref().position() as usize).min(bytes.len());
-        return crate::ply_binary::read(&header, &bytes[at..]).map_err(|e| match e {
-            None => read_error(
+        let Some((mut mesh, faces)) = crate::ply_binary::read(&header, &bytes[at..]) else {
+            return Err(read_error(
                 path,
                 "the file ends before the elements its header announces",
-            ),
-            Some(m) => format!("'{}': {m}", path.display()),
-        });
+            ));
+        };
+        add_faces(path, &mut mesh, faces.iter(), faces.bad)?;
+        return Ok(mesh);
     }
     let mut vertices: Vec<PlyVertex> = Vec::new();
     let mut faces: Vec<PlyFace> = Vec::new();
@@ -294,7 +295,6 @@ fn load_ply_with(path: &Path, bytes: &[u8], fast: bool) -> Result<Mesh, String> 
             }
         }
     }
-    let nv = vertices.len() as i64;
     let mut mesh = Mesh {
         positions: vertices
             .iter()
@@ -314,26 +314,33 @@ fn load_ply_with(path: &Path, bytes: &[u8], fast: bool) -> Result<Mesh, String> 
             .map(|v| Point2::new(v.uv[0], v.uv[1]))
             .collect();
     }
-    mesh.indices.reserve(faces.len());
-    for f in &faces {
-        if f.bad || f.indices.iter().any(|&i| i < 0 || i >= nv) {
-            return Err(format!(
-                "'{}': a face refers to a vertex that does not exist",
-                path.display()
-            ));
-        }
-        for k in 1..f.indices.len().saturating_sub(1) {
-            push_triangle(
-                &mut mesh,
-                [
-                    f.indices[0] as u32,
-                    f.indices[k] as u32,
-                    f.indices[k + 1] as u32,
-                ],
-            );
+    let bad = faces.iter().any(|f| f.bad);
+    add_faces(path, &mut mesh, faces.iter().map(|f| &f.indices[..]), bad)?;
+    Ok(mesh)
+}
+
+/// Checks `faces`' indices against `mesh`'s vertices (`bad`: a face's index list was not of
+/// integers) and adds each face as a fan of triangles.
+fn add_faces<'a>(
+    path: &Path,
+    mesh: &mut Mesh,
+    faces: impl Iterator<Item = &'a [i64]> + Clone,
+    bad: bool,
+) -> Result<(), String> {
+    let nv = mesh.positions.len() as i64;
+    if bad || faces.clone().any(|f| f.iter().any(|&i| i < 0 || i >= nv)) {
+        return Err(format!(
+            "'{}': a face refers to a vertex that does not exist",
+            path.display()
+        ));
+    }
+    mesh.indices.reserve(faces.size_hint().0);
+    for f in faces {
+        for k in 1..f.len().saturating_sub(1) {
+            push_triangle(mesh, [f[0] as u32, f[k] as u32, f[k + 1] as u32]);
         }
     }
-    Ok(mesh)
+    Ok(())
 }
 
 #[cfg(test)]

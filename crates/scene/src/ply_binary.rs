@@ -4,11 +4,12 @@
 //! growing array of records: loading the bench's three meshes, 212 480 triangles, took about
 //! 56 ms, a third of it copying and first touches of memory.)
 //!
-//! What it reads is what [`crate::mesh::load_ply`]'s general path reads, value for value: the
+//! What it reads is what `load_ply`'s general path reads, value for value: the
 //! vertex properties x, y, z, nx, ny, nz and u, v (or s, t, texture_u, ...) of any scalar type,
 //! and a face's list named `vertex_indices` (or `vertex_index`) of any integer type; every other
-//! property and element is passed over. Faces are checked and split into fans once the whole
-//! payload has been read, so that a file cut short is reported as such whatever it holds.
+//! property and element is passed over. The caller checks the faces and splits them into fans
+//! once the whole payload has been read, so that a file cut short is reported as such whatever
+//! it holds.
 
 use candela_render::math::{Normal3, Point2, Point3};
 use candela_render::shape::Mesh;
@@ -115,26 +116,38 @@ fn vertex_slot(name: &str) -> Option<usize> {
     })
 }
 
-/// The mesh of a binary PLY file whose header is `header` and whose payload (what follows the
-/// header) is `payload`; `Err(None)` when the payload ends early, `Err(Some(message))` when a
-/// face refers to a vertex that does not exist. The caller reads ASCII files otherwise.
-pub(crate) fn read(header: &Header, payload: &[u8]) -> Result<Mesh, Option<String>> {
+/// The vertices of a binary PLY file whose header is `header` and whose payload (what follows
+/// the header) is `payload`, as a mesh without triangles, and its faces; `None` when the payload
+/// ends early. The caller reads ASCII files otherwise, and checks and splits the faces.
+pub(crate) fn read(header: &Header, payload: &[u8]) -> Option<(Mesh, Faces)> {
     let mut p = Payload {
         bytes: payload,
         at: 0,
         big_endian: matches!(header.encoding, Encoding::BinaryBigEndian),
     };
-    let (mesh, faces) = read_elements(header, &mut p).map_err(|Truncated| None)?;
-    triangulate(mesh, &faces).map_err(Some)
+    read_elements(header, &mut p).ok()
 }
 
 /// The faces as read: the indices of all, one after the other, each face's count, and whether
 /// a face had an index list of a non-integer type.
 #[derive(Default)]
-struct Faces {
+pub(crate) struct Faces {
     indices: Vec<i64>,
     counts: Vec<u32>,
-    bad: bool,
+    /// A face's index list is of a non-integer type.
+    pub(crate) bad: bool,
+}
+
+impl Faces {
+    /// Each face's indices, in the file's order.
+    pub(crate) fn iter(&self) -> impl Iterator<Item = &[i64]> + Clone {
+        let mut at = 0;
+        self.counts.iter().map(move |&n| {
+            let f = &self.indices[at..at + n as usize];
+            at += n as usize;
+            f
+        })
+    }
 }
 
 /// Reads every element of the payload: the vertices into a mesh, the faces aside.
@@ -221,23 +234,4 @@ fn read_elements(header: &Header, p: &mut Payload) -> Result<(Mesh, Faces), Trun
         }
     }
     Ok((mesh, faces))
-}
-
-/// Checks the faces' indices against the vertex count and splits each face into a fan of
-/// triangles (as `load_ply`'s general path does).
-fn triangulate(mut mesh: Mesh, faces: &Faces) -> Result<Mesh, String> {
-    let nv = mesh.positions.len() as i64;
-    if faces.bad || faces.indices.iter().any(|&i| i < 0 || i >= nv) {
-        return Err("a face refers to a vertex that does not exist".to_string());
-    }
-    mesh.indices.reserve(faces.counts.len());
-    let mut at = 0;
-    for &n in &faces.counts {
-        let f = &faces.indices[at..at + n as usize];
-        at += n as usize;
-        for k in 1..f.len().saturating_sub(1) {
-            crate::mesh::push_triangle(&mut mesh, [f[0] as u32, f[k] as u32, f[k + 1] as u32]);
-        }
-    }
-    Ok(mesh)
 }
