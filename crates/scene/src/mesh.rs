@@ -8,6 +8,7 @@
 //! candela's image lookup counts rows from the top, as Mitsuba does). Indices are validated;
 //! faces with an out-of-range index are an error, degenerate faces are dropped.
 
+use crate::ply_binary::{is_index_list, vertex_slot};
 use candela_imageio::Limits;
 use candela_render::math::{Normal3, Point2, Point3, Transform};
 use candela_render::shape::Mesh;
@@ -148,19 +149,20 @@ const HAS_UV: u8 = 2;
 
 impl PlyVertex {
     fn set(&mut self, name: &str, v: f64) -> PropertyAccessResult {
+        let Some(k) = vertex_slot(name) else {
+            return PropertyAccessResult::Ignored;
+        };
         let v = v as f32;
-        match name {
-            "x" => self.p[0] = v,
-            "y" => self.p[1] = v,
-            "z" => self.p[2] = v,
-            "nx" => (self.n[0], self.has) = (v, self.has | HAS_N),
-            "ny" => self.n[1] = v,
-            "nz" => self.n[2] = v,
-            "u" | "s" | "texture_u" | "texture_s" => {
-                (self.uv[0], self.has) = (v, self.has | HAS_UV)
-            }
-            "v" | "t" | "texture_v" | "texture_t" => self.uv[1] = v,
-            _ => return PropertyAccessResult::Ignored,
+        match k {
+            0..=2 => self.p[k] = v,
+            3..=5 => self.n[k - 3] = v,
+            _ => self.uv[k - 6] = v,
+        }
+        // (The first normal and texture coordinates say that the vertex has them.)
+        match k {
+            3 => self.has |= HAS_N,
+            6 => self.has |= HAS_UV,
+            _ => {}
         }
         PropertyAccessResult::Set
     }
@@ -201,10 +203,6 @@ impl PropertyAccess for PlyVertex {
 struct PlyFace {
     indices: Vec<i64>,
     bad: bool,
-}
-
-fn is_index_list(name: &str) -> bool {
-    name == "vertex_indices" || name == "vertex_index"
 }
 
 macro_rules! face_list {

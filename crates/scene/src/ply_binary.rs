@@ -101,8 +101,9 @@ impl Payload<'_> {
 }
 
 /// Where a vertex property goes: a coordinate of the position (0–2), the normal (3–5) or the
-/// texture coordinates (6–7), as `load_ply`'s general path names them.
-fn vertex_slot(name: &str) -> Option<usize> {
+/// texture coordinates (6–7); `None` for a property candela does not read. (Both PLY readers
+/// name properties through this and [`is_index_list`].)
+pub(crate) fn vertex_slot(name: &str) -> Option<usize> {
     Some(match name {
         "x" => 0,
         "y" => 1,
@@ -114,6 +115,11 @@ fn vertex_slot(name: &str) -> Option<usize> {
         "v" | "t" | "texture_v" | "texture_t" => 7,
         _ => return None,
     })
+}
+
+/// Whether a face property named `name` holds the face's vertex indices.
+pub(crate) fn is_index_list(name: &str) -> bool {
+    name == "vertex_indices" || name == "vertex_index"
 }
 
 /// The vertices of a binary PLY file whose header is `header` and whose payload (what follows
@@ -190,11 +196,7 @@ fn read_elements(header: &Header, p: &mut Payload) -> Result<(Mesh, Faces), Trun
                 }
             }
             "face" => {
-                let lists: Vec<bool> = def
-                    .properties
-                    .keys()
-                    .map(|k| k == "vertex_indices" || k == "vertex_index")
-                    .collect();
+                let lists: Vec<bool> = def.properties.keys().map(|k| is_index_list(k)).collect();
                 faces.counts = Vec::with_capacity(def.count);
                 faces.indices = Vec::with_capacity(def.count.saturating_mul(3).min(p.bytes.len()));
                 for _ in 0..def.count {
