@@ -1,8 +1,8 @@
 //! The payload of a binary PLY file read straight into a mesh, after `ply-rs-bw` has read the
 //! header: each property at its offset, of its own type, with no value made per element. (Through
 //! the crate's element parser, a face was a heap list of its own, and its vertices and faces a
-//! growing array of records: loading the bench's three meshes, 212 480 triangles, took about
-//! 56 ms, a third of it copying and first touches of memory.)
+//! growing array of records: the bench's three meshes, 212 480 triangles, parsed in 18.8 ms;
+//! read here, in 5.0 ms, warm, medians of 5.)
 //!
 //! What it reads is what `load_ply`'s general path reads, value for value: the
 //! vertex properties x, y, z, nx, ny, nz and u, v (or s, t, texture_u, ...) of any scalar type,
