@@ -46,6 +46,54 @@ pub struct Scene {
     /// True when a material's or emitter's texture varies over a surface: only then do
     /// [`Scene::interaction`]s carry texture coordinates (see [`Material::reads_uv`]).
     pub reads_uv: bool,
+    /// Spheres bounding the perfectly specular objects, which diffuse vertices sample
+    /// directions towards beside their cosine-weighted ones (see [`crate::sampling::guide`]).
+    pub guides: Vec<crate::sampling::guide::Guide>,
+}
+
+/// The bounding spheres of the objects of `geometry` whose material is a perfect mirror or a
+/// smooth dielectric (the first [`crate::sampling::guide::MAX_GUIDES`]): a sphere's own,
+/// other shapes' the sphere about their bounds. (Meshes are left out.)
+fn guides_of(geometry: &Geometry, materials: &[Material]) -> Vec<crate::sampling::guide::Guide> {
+    use crate::material::Model;
+    use crate::sampling::guide::Guide;
+    let mut out = Vec::new();
+    for o in geometry.objects() {
+        let m = &materials[o.props.material as usize];
+        let delta = matches!(
+            m.model,
+            Model::Specular { .. }
+                | Model::Conductor { mf: None, .. }
+                | Model::Dielectric { mf: None, .. }
+        );
+        if !delta || out.len() == crate::sampling::guide::MAX_GUIDES {
+            continue;
+        }
+        let g = match &o.shape {
+            crate::shape::Shape::Sphere(s) => {
+                let m = &s.world_from_object;
+                let r = [Vec3::X, Vec3::Y, Vec3::Z]
+                    .iter()
+                    .map(|&a| m.vector(a).norm())
+                    .fold(0.0f32, f32::max);
+                Guide {
+                    c: m.point(crate::math::Point3::ORIGIN),
+                    r,
+                }
+            }
+            shape => match shape.bounds() {
+                Some(b) => Guide {
+                    c: b.min + (b.max - b.min) * 0.5,
+                    r: (b.max - b.min).norm() * 0.5,
+                },
+                None => continue,
+            },
+        };
+        if g.r.is_finite() && g.r > 0.0 {
+            out.push(g);
+        }
+    }
+    out
 }
 
 /// The most masked surfaces a ray passes through before the next one counts as a hit.
@@ -575,7 +623,9 @@ impl SceneBuilder {
         let light_selector = LightSelector::new(&self.lights, &self.emissions, &geometry);
         let reads_uv = self.materials.iter().any(Material::reads_uv)
             || self.emissions.iter().any(|e| !e.radiance.is_constant());
+        let guides = guides_of(&geometry, &self.materials);
         Scene {
+            guides,
             camera: self
                 .camera
                 .unwrap_or_else(|| Camera::perspective(1.0, 4.0 / 3.0, Transform::IDENTITY)),

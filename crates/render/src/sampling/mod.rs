@@ -1,6 +1,7 @@
 //! Random numbers, per-pixel samplers and sampling warps.
 
 pub mod distribution;
+pub mod guide;
 pub mod pcg;
 pub mod sampler;
 pub mod warp;

@@ -247,6 +247,15 @@ fn run_avx2x2<K: WideKernel>(k: K) -> K::Output {
     k.run(unsafe { Avx2x2::new() })
 }
 
+/// The SSE kernel of `k`, out of line as the others are (they must be, for their instruction
+/// sets). Inlined, every kernel's SSE version went into its caller: the lanes' shading
+/// function held six of them, and its loop passes took minutes to compile.
+#[cfg(target_arch = "x86_64")]
+#[inline(never)]
+fn run_sse<K: WideKernel>(k: K) -> K::Output {
+    k.run(Sse4)
+}
+
 /// Runs `k` at `level`, or at the widest level below it that the CPU supports.
 #[inline(always)]
 pub(crate) fn run_wide_at<K: WideKernel>(level: SimdLevel, k: K) -> K::Output {
@@ -261,7 +270,7 @@ pub(crate) fn run_wide_at<K: WideKernel>(level: SimdLevel, k: K) -> K::Output {
             // SAFETY: the CPU supports every feature `run_avx2x2` is compiled with.
             return unsafe { run_avx2x2(k) };
         }
-        k.run(Sse4)
+        run_sse(k)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {

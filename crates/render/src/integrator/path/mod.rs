@@ -23,6 +23,7 @@ use crate::material::{
     Model, RoughCoating, RoughPlastic,
 };
 use crate::math::{lanes, Ray, RayBatch, BATCH};
+use crate::sampling::guide::GuideCones;
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -263,6 +264,41 @@ type LaneNumbers<'s> = (
     Option<PlasticVertex<'s>>,
 );
 
+/// A diffuse vertex's next direction with caustic guides (`cones`, see `sampling::guide`):
+/// from the cone the first number of `u2` picks, or else the BSDF's cosine-weighted sample
+/// (`GuideCones::split`), weighed by f·cos over the mixture's density. (The lanes repeat it:
+/// `SurfaceLanes::shade`.)
+#[inline(never)]
+fn guided_sample(
+    bsdf: &crate::material::Bsdf,
+    cones: &GuideCones,
+    (wo, flip): (crate::math::Vec3, bool),
+    u1: f32,
+    u2: [f32; 2],
+) -> Option<crate::material::BsdfSample> {
+    let (j, v) = cones.split(u2[0]);
+    let u = [v, u2[1]];
+    let wi = match j {
+        Some(j) => cones.sample(j, u),
+        None => bsdf.sample_local(wo, flip, u1, u)?.wi,
+    };
+    if !wi.is_finite() {
+        return None;
+    }
+    let (f, pdf_b) = bsdf.eval_pdf_local(wo, bsdf.local_wi(wi, flip));
+    let pdf = cones.mix(pdf_b, wi);
+    if !(pdf > 0.0) || f.is_black() {
+        return None;
+    }
+    Some(crate::material::BsdfSample {
+        wi,
+        weight: SampledSpectrum(f.0.map(|x| x / pdf)),
+        pdf,
+        delta: false,
+        eta: 1.0,
+    })
+}
+
 /// What a vertex asks of the caller: a shadow ray to test and the radiance it adds when the
 /// ray is unblocked (next-event estimation), and whether the path goes on.
 struct VertexOutcome {
@@ -384,6 +420,7 @@ impl Path {
             let flip = material.two_sided && cos_o < 0.0;
             let wo_z = if flip { -cos_o } else { cos_o };
             let roulette = st.depth + 1 >= self.rr_depth;
+            let lambert_lane = matches!(model, LaneModel::Lambert);
             let (u, u2, u_rr, surface) = match model {
                 LaneModel::Lambert => {
                     let (u, u2, u_rr) = sampler.lambert_numbers(roulette);
@@ -440,6 +477,10 @@ impl Path {
             if let Some((conductor, plastic)) = surface {
                 lanes.set_surface(lane, si.wo, conductor, plastic);
             }
+            if lambert_lane && !scene.guides.is_empty() {
+                // (Its direction sampled with the caustic guides: `guided_sample` below.)
+                lanes.set_guided(lane);
+            }
             return None;
         }
         if delta {
@@ -463,6 +504,15 @@ impl Path {
             reflect_only: bsdf.reflects_only(),
         };
 
+        // Caustic guides (see `sampling::guide`): a diffuse vertex's directions are drawn
+        // towards the specular objects too, and weighed by the mixture's density.
+        let cones = match material.model {
+            Model::Diffuse { .. } if !scene.guides.is_empty() => {
+                GuideCones::at(&scene.guides, si.p)
+            }
+            _ => GuideCones::NONE,
+        };
+
         // Next-event estimation (see `Path::sample_light`).
         let mut shadow = None;
         if let (false, Some(every)) = (bsdf.is_delta(), every) {
@@ -478,7 +528,7 @@ impl Path {
                         let w = if ls.delta {
                             1.0
                         } else {
-                            power_heuristic(1.0, ls.pdf, 1.0, pdf)
+                            power_heuristic(1.0, ls.pdf, 1.0, cones.mix(pdf, ls.wi))
                         };
                         every[k] = Some((
                             super::local::shadow_ray(&si, ls.wi, ls.target),
@@ -496,7 +546,7 @@ impl Path {
                     let w = if ls.delta {
                         1.0
                     } else {
-                        power_heuristic(1.0, pdf_light, 1.0, pdf)
+                        power_heuristic(1.0, pdf_light, 1.0, cones.mix(pdf, ls.wi))
                     };
                     shadow = Some((
                         super::local::shadow_ray(&si, ls.wi, ls.target),
@@ -516,7 +566,12 @@ impl Path {
         // BSDF sampling continues the path.
         let u1 = sampler.next_1d();
         let u2 = sampler.next_2d();
-        let Some(bs) = bsdf.sample_local(wo, flip, u1, u2) else {
+        let sampled = if cones.g == 0 {
+            bsdf.sample_local(wo, flip, u1, u2)
+        } else {
+            guided_sample(&bsdf, &cones, (wo, flip), u1, u2)
+        };
+        let Some(bs) = sampled else {
             return Some(VertexOutcome {
                 shadow,
                 alive: false,
@@ -878,6 +933,7 @@ impl Path {
         let mut extra: Shadows = [None; MAX_SHADOWS];
         let mut lambert = SurfaceLanes::default();
         lambert.unbounded = self.max_depth.is_none();
+        lambert.guides = &scene.guides;
         if every {
             lambert.extra = scene.lights.len() - 1;
         }

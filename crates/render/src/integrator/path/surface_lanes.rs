@@ -34,6 +34,7 @@ use crate::material::RoughCoating;
 use crate::math::{
     Frame, Normal3, Point2, Point3, RayBatch, Vec3, BATCH, INV_PI, PI, SHADOW_EPSILON,
 };
+use crate::sampling::guide::{Guide, GUIDE_SHARE, MAX_GUIDES, ONE_MINUS_EPSILON};
 use crate::shape::Parallelogram;
 use crate::simd::SimdLevel;
 use crate::simd::{Wide, WideKernel};
@@ -89,6 +90,21 @@ pub(super) struct SurfaceLanes<'s> {
     kb: [L; 4],
     u1: L,
     coatings: [Option<&'s RoughCoating>; BATCH],
+    /// The scene's caustic guides (`sampling::guide`; at most `MAX_GUIDES`), and the Lambert
+    /// lanes that sample with them. Made by `GuideConeLanes` before the shading: the cones
+    /// seen from each lane (`GuideCones`: how many are seen from outside, and each one's unit
+    /// axis, 1 − cos θ_max and density), the lanes whose direction pair picked a cone
+    /// (`GuideCones::split`, its first number made uniform again in `u2`), and that cone's
+    /// axis and 1 − cos θ_max.
+    pub(super) guides: &'s [Guide],
+    guided: u32,
+    cone: u32,
+    c_axis: [L; 3],
+    c_omc: L,
+    g_n: L,
+    g_axis: [[L; 3]; MAX_GUIDES],
+    g_omc: [L; MAX_GUIDES],
+    g_pdf: [L; MAX_GUIDES],
     /// The light samples of the lanes: one per lane, or in the every-light mode (see
     /// `super::every_light`) one per light of the scene, each with its own shadow ray.
     lights: [LightLanes; MAX_SHADOWS],
@@ -431,6 +447,13 @@ impl<'s> SurfaceLanes<'s> {
         }
     }
 
+    /// Makes lane `i`, a Lambert vertex, sample its direction with the scene's caustic guides
+    /// (`guided_sample` in `path/mod.rs`).
+    #[inline(always)]
+    pub(super) fn set_guided(&mut self, i: usize) {
+        self.guided |= 1 << i;
+    }
+
     /// Puts light sample `k` of lane `i` in (a light sample made by the light, or none; not a
     /// parallelogram to sample here).
     #[inline(always)]
@@ -516,6 +539,7 @@ impl<'s> SurfaceLanes<'s> {
             &mut self.ggx,
             &mut self.fresnel,
             &mut self.plastic,
+            &mut self.guided,
         ] {
             *mask &= m;
         }
@@ -539,21 +563,38 @@ impl<'s> SurfaceLanes<'s> {
             l.light |= usable;
             self.sphere = 0;
         }
+        // The guided lanes' cones, likewise.
+        if self.guided != 0 {
+            crate::simd::run_wide_at(level, GuideConeLanes(self));
+        }
         // Lambert lanes alone take a kernel compiled without the other models: with them in,
         // the compiler computes parts of their terms ahead of the tests that skip them, and
         // the Lambert kernel ran several times slower (see `Shade`).
-        match (self.ggx != 0, self.plastic != 0) {
-            (false, false) => {
-                crate::simd::run_wide_at(level, Shade::<false, false>(self, next, shadows))
+        // (Guided Lambert lanes likewise take kernels of their own.)
+        match (self.ggx != 0, self.plastic != 0, self.guided != 0) {
+            (false, false, false) => {
+                crate::simd::run_wide_at(level, Shade::<false, false, false>(self, next, shadows))
             }
-            (true, false) => {
-                crate::simd::run_wide_at(level, Shade::<true, false>(self, next, shadows))
+            (true, false, false) => {
+                crate::simd::run_wide_at(level, Shade::<true, false, false>(self, next, shadows))
             }
-            (false, true) => {
-                crate::simd::run_wide_at(level, Shade::<false, true>(self, next, shadows))
+            (false, true, false) => {
+                crate::simd::run_wide_at(level, Shade::<false, true, false>(self, next, shadows))
             }
-            (true, true) => {
-                crate::simd::run_wide_at(level, Shade::<true, true>(self, next, shadows))
+            (true, true, false) => {
+                crate::simd::run_wide_at(level, Shade::<true, true, false>(self, next, shadows))
+            }
+            (false, false, true) => {
+                crate::simd::run_wide_at(level, Shade::<false, false, true>(self, next, shadows))
+            }
+            (true, false, true) => {
+                crate::simd::run_wide_at(level, Shade::<true, false, true>(self, next, shadows))
+            }
+            (false, true, true) => {
+                crate::simd::run_wide_at(level, Shade::<false, true, true>(self, next, shadows))
+            }
+            (true, true, true) => {
+                crate::simd::run_wide_at(level, Shade::<true, true, true>(self, next, shadows))
             }
         }
         for (l, pending) in self.lights[..=self.extra].iter().zip(pending) {
@@ -561,10 +602,12 @@ impl<'s> SurfaceLanes<'s> {
                 pending[i] = SampledSpectrum([l.c[0][i], l.c[1][i], l.c[2][i], l.c[3][i]]);
             }
         }
-        // The other models' lanes are put in afresh at each step (`set_surface`).
+        // The other models' lanes are put in afresh at each step (`set_surface`), and so are
+        // the guided ones (`set_guides`).
         self.ggx = 0;
         self.fresnel = 0;
         self.plastic = 0;
+        self.guided = 0;
     }
 
     /// What is left of lane `i` once [`SurfaceLanes::shade`] has run: the shadow ray of a light
@@ -639,19 +682,7 @@ impl WideKernel for SphereSamples<'_, '_> {
             w.mul(w.sub(c[2], p[2]), inv_d),
         ];
         // The frame about the axis.
-        let sign = w.copysign(one, axis[2]);
-        let a = w.div(w.splat(-1.0), w.add(sign, axis[2]));
-        let b = w.mul(w.mul(axis[0], axis[1]), a);
-        let fs = [
-            w.add(one, w.mul(w.mul(w.mul(sign, axis[0]), axis[0]), a)),
-            w.mul(sign, b),
-            w.mul(w.neg(sign), axis[0]),
-        ];
-        let ft = [
-            b,
-            w.add(sign, w.mul(w.mul(axis[1], axis[1]), a)),
-            w.neg(axis[1]),
-        ];
+        let (fs, ft) = frame_about(w, axis);
         // The direction, uniform in the cone (a = 1 − cos θ).
         let a = w.mul(u0, one_minus_cos);
         let a2 = w.mul(a, w.sub(two, a));
@@ -701,13 +732,13 @@ impl WideKernel for SphereSamples<'_, '_> {
 
 /// [`SurfaceLanes::shade`] as a kernel, with rough conductors (`C`) and rough plastics (`P`)
 /// among the lanes or not (without, their code is left out).
-struct Shade<'a, 's, const C: bool, const P: bool>(
+struct Shade<'a, 's, const C: bool, const P: bool, const G: bool>(
     &'a mut SurfaceLanes<'s>,
     &'a mut RayBatch,
     &'a mut Shadows,
 );
 
-impl<const C: bool, const P: bool> WideKernel for Shade<'_, '_, C, P> {
+impl<const C: bool, const P: bool, const G: bool> WideKernel for Shade<'_, '_, C, P, G> {
     type Output = ();
 
     #[inline(always)]
@@ -841,6 +872,22 @@ impl<const C: bool, const P: bool> WideKernel for Shade<'_, '_, C, P> {
             conductor,
             plastic,
             coatings: (&x.coatings, x.plastic),
+            guides: if G {
+                Some(GuideLanes {
+                    count: x.guides.len().min(MAX_GUIDES),
+                    on: w.and(all, w.mask(x.guided)),
+                    n: w.load(&x.g_n),
+                    k: w.div(
+                        w.splat(GUIDE_SHARE),
+                        w.splat(x.guides.len().min(MAX_GUIDES) as f32),
+                    ),
+                    axis: &x.g_axis,
+                    omc: &x.g_omc,
+                    pdf: &x.g_pdf,
+                })
+            } else {
+                None
+            },
         };
         let mut shadows = shadows.iter_mut();
         let Some(first) = shadows.next() else {
@@ -905,6 +952,50 @@ impl<const C: bool, const P: bool> WideKernel for Shade<'_, '_, C, P> {
         // Lambert's sample weighs the throughput by the reflectance; a conductor's by f·cos/pdf
         // of its sample of the visible normals (`conductor::sample`, `world_wi`).
         let mut weight = r;
+        // Guided Lambert lanes (`guided_sample` in `path/mod.rs`): a direction in the cone the
+        // lobe number picks, or the cosine-weighted one above, weighed by f·cos over the
+        // mixture's density.
+        if let Some(g) = &at.guides {
+            let cone = w.and(g.on, w.mask(x.cone));
+            let axis = load3(w, &x.c_axis);
+            let omc = w.load(&x.c_omc);
+            let (fs, ft) = frame_about(w, axis);
+            let (u0, u1) = (w.load(&x.u2[0]), w.load(&x.u2[1]));
+            let a = w.mul(u0, omc);
+            let a2 = w.mul(a, w.sub(two, a));
+            let rad = w.sqrt(w.select(w.lt(a2, zero), zero, a2));
+            let (sin_phi, cos_phi) = microfacet_lanes::sin_cos_turn(w, u1);
+            let local = [w.mul(rad, cos_phi), w.mul(rad, sin_phi), w.sub(one, a)];
+            let mut wi_g = wi;
+            let mut ok_g = w.or(cone, up);
+            for k in 0..3 {
+                let c = w.add(
+                    w.add(w.mul(fs[k], local[0]), w.mul(ft[k], local[1])),
+                    w.mul(axis[k], local[2]),
+                );
+                wi_g[k] = w.select(cone, c, wi[k]);
+                ok_g = w.and(ok_g, finite(w, wi_g[k]));
+            }
+            // f·cos and the cosine's density of the direction (`lambert::eval`, `pdf`).
+            let iz = dot(w, wi_g, n);
+            let iz = w.select(flip, w.neg(iz), iz);
+            let f_on = w.and(wo_up, positive(w, all, iz));
+            let cos_pi = w.mul(inv_pi, iz);
+            let pdf_b = w.select(w.and(wo_up, w.gt(iz, zero)), w.mul(iz, inv_pi), zero);
+            let mix = guide_mix(w, g, pdf_b, wi_g);
+            let mut f_nonzero = w.mask(0);
+            for k in 0..4 {
+                let f = w.select(f_on, w.mul(r[k], cos_pi), zero);
+                f_nonzero = w.or(f_nonzero, w.ne(f, zero));
+                weight[k] = w.select(g.on, w.div(f, mix), weight[k]);
+            }
+            ok_g = w.and(ok_g, w.and(w.and(wo_up, f_nonzero), w.gt(mix, zero)));
+            for k in 0..3 {
+                wi[k] = w.select(g.on, wi_g[k], wi[k]);
+            }
+            ok = w.or(w.and(g.on, ok_g), w.and_not(ok, g.on));
+            pdf = w.select(g.on, mix, pdf);
+        }
         if let Some(c) = &at.conductor {
             let u2 = [w.load(&x.u2[0]), w.load(&x.u2[1])];
             let microfacet_lanes::Sample {
@@ -921,7 +1012,7 @@ impl<const C: bool, const P: bool> WideKernel for Shade<'_, '_, C, P> {
                 wi[k] = w.select(c.on, d, wi[k]);
             }
             for k in 0..4 {
-                weight[k] = w.select(c.on, weight_c[k], r[k]);
+                weight[k] = w.select(c.on, weight_c[k], weight[k]);
             }
             ok = w.or(w.and(c.on, ok_c), w.and_not(ok, c.on));
             pdf = w.select(c.on, pdf_c, pdf);
@@ -1006,6 +1097,132 @@ struct Shading<'a, 's, W: Wide> {
     conductor: Option<Conductor<W>>,
     plastic: Option<Plastic<W>>,
     coatings: Coatings<'a, 's>,
+    guides: Option<GuideLanes<'a, W>>,
+}
+
+/// The guided lanes' cones (`SurfaceLanes::guided`), read where they are needed: the lanes,
+/// the share over the number of cones, and each cone's axis, 1 − cos θ_max and density.
+struct GuideLanes<'a, W: Wide> {
+    count: usize,
+    on: W::M,
+    n: W::V,
+    k: W::V,
+    axis: &'a [[L; 3]; MAX_GUIDES],
+    omc: &'a [L; MAX_GUIDES],
+    pdf: &'a [L; MAX_GUIDES],
+}
+
+/// `GuideCones::mix` in the lanes of `g` (`pdf` in the others), for the unit direction `wi`.
+#[inline(always)]
+fn guide_mix<W: Wide>(w: W, g: &GuideLanes<'_, W>, pdf: W::V, wi: [W::V; 3]) -> W::V {
+    let (zero, one) = (w.splat(0.0), w.splat(1.0));
+    let mut m = w.mul(w.sub(one, w.mul(g.k, g.n)), pdf);
+    // (The slots beyond the scene's guides would add zeros.)
+    for j in 0..g.count {
+        let d = dot(w, wi, load3(w, &g.axis[j]));
+        let inside = w.le(w.sub(one, d), w.load(&g.omc[j]));
+        m = w.add(m, w.select(inside, w.mul(g.k, w.load(&g.pdf[j])), zero));
+    }
+    w.select(g.on, m, pdf)
+}
+
+/// The cones of the scene's guides seen from the guided lanes' points (`GuideCones::at`,
+/// operation for operation), into `g_axis`, `g_omc`, `g_pdf` and `g_n`.
+struct GuideConeLanes<'a, 's>(&'a mut SurfaceLanes<'s>);
+
+impl WideKernel for GuideConeLanes<'_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<W: Wide>(self, w: W) {
+        let x = self.0;
+        let on = w.mask(x.guided);
+        let (zero, one) = (w.splat(0.0), w.splat(1.0));
+        let p = load3(w, &x.p_x);
+        let mut n = zero;
+        for j in 0..MAX_GUIDES {
+            let Some(g) = x.guides.get(j) else {
+                put(w, on, w.splat(-1.0), &mut x.g_omc[j]);
+                put(w, on, zero, &mut x.g_pdf[j]);
+                continue;
+            };
+            let to = [
+                w.sub(w.splat(g.c.x), p[0]),
+                w.sub(w.splat(g.c.y), p[1]),
+                w.sub(w.splat(g.c.z), p[2]),
+            ];
+            let d2 = dot(w, to, to);
+            let rr = w.splat(g.r * g.r);
+            // `warp::one_minus_cos_from_sin2` and `uniform_cone_pdf_narrow`.
+            let s = w.div(rr, d2);
+            let s = w.select(w.lt(s, zero), zero, s);
+            let s = w.select(w.gt(s, one), one, s);
+            let omc = w.div(s, w.add(one, w.sqrt(w.sub(one, s))));
+            let pdf = w.div(one, w.mul(w.splat(2.0 * PI), omc));
+            let seen = w.and(
+                w.and(on, w.gt(d2, w.mul(rr, w.splat(1.0001)))),
+                w.and(w.gt(omc, zero), finite(w, pdf)),
+            );
+            let inv = w.div(one, w.sqrt(d2));
+            for k in 0..3 {
+                put(
+                    w,
+                    on,
+                    w.select(seen, w.mul(to[k], inv), zero),
+                    &mut x.g_axis[j][k],
+                );
+            }
+            put(w, on, w.select(seen, omc, w.splat(-1.0)), &mut x.g_omc[j]);
+            put(w, on, w.select(seen, pdf, zero), &mut x.g_pdf[j]);
+            n = w.add(n, w.select(seen, one, zero));
+        }
+        put(w, on, n, &mut x.g_n);
+        // The strategy the direction pair's first number picks (`GuideCones::split`).
+        let share = w.splat(GUIDE_SHARE);
+        let g = w.splat(x.guides.len().min(MAX_GUIDES) as f32);
+        let u = w.load(&x.u2[0]);
+        let t = w.mul(w.div(u, share), g);
+        let mut j = zero;
+        let mut axis = load3(w, &x.g_axis[0]);
+        let mut omc = w.load(&x.g_omc[0]);
+        for k in 1..x.guides.len().min(MAX_GUIDES) {
+            let kf = w.splat(k as f32);
+            let take = w.and(w.le(kf, t), w.gt(g, kf));
+            j = w.select(take, kf, j);
+            let a = load3(w, &x.g_axis[k]);
+            for c in 0..3 {
+                axis[c] = w.select(take, a[c], axis[c]);
+            }
+            omc = w.select(take, w.load(&x.g_omc[k]), omc);
+        }
+        let in_share = w.lt(u, share);
+        let v_cos = w.div(w.sub(u, share), w.splat(1.0 - GUIDE_SHARE));
+        let v = w.select(in_share, w.sub(t, j), v_cos);
+        let top = w.splat(ONE_MINUS_EPSILON);
+        put(w, on, w.select(w.lt(top, v), top, v), &mut x.u2[0]);
+        let cone = w.and(w.and(on, in_share), w.gt(omc, zero));
+        for c in 0..3 {
+            put(w, cone, axis[c], &mut x.c_axis[c]);
+        }
+        put(w, cone, omc, &mut x.c_omc);
+        x.cone = w.bits(cone);
+    }
+}
+
+/// The tangents of `Frame::from_normal` about the unit vector `a`, operation for operation.
+#[inline(always)]
+fn frame_about<W: Wide>(w: W, a: [W::V; 3]) -> ([W::V; 3], [W::V; 3]) {
+    let one = w.splat(1.0);
+    let sign = w.copysign(one, a[2]);
+    let k = w.div(w.splat(-1.0), w.add(sign, a[2]));
+    let b = w.mul(w.mul(a[0], a[1]), k);
+    let s = [
+        w.add(one, w.mul(w.mul(w.mul(sign, a[0]), a[0]), k)),
+        w.mul(sign, b),
+        w.mul(w.neg(sign), a[0]),
+    ];
+    let t = [b, w.add(sign, w.mul(w.mul(a[1], a[1]), k)), w.neg(a[1])];
+    (s, t)
 }
 
 /// Each lane's rough-plastic coating, and the lanes that have one.
@@ -1070,6 +1287,7 @@ fn nee<W: Wide>(
         ref conductor,
         ref plastic,
         coatings,
+        ref guides,
     } = *at;
     let iz = w.add(
         w.add(w.mul(lw[0], n[0]), w.mul(lw[1], n[1])),
@@ -1087,6 +1305,9 @@ fn nee<W: Wide>(
         w.mul(iz, w.splat(INV_PI)),
         zero,
     );
+    if let Some(g) = guides {
+        pdf_bsdf = guide_mix(w, g, pdf_bsdf, lw);
+    }
     // The direction in the shading frame (`Bsdf::local_wi`), for the models that need more
     // than its z (loaded here: kept from the start, the tangents crowded out the registers).
     // (Not a closure: closures do not inherit the kernel's instruction set, and the
