@@ -249,7 +249,7 @@ fn run_avx2x2<K: WideKernel>(k: K) -> K::Output {
 
 /// The SSE kernel of `k`, out of line as the others are (they must be, for their instruction
 /// sets). Inlined, every kernel's SSE version went into its caller: the lanes' shading
-/// function held six of them, and its loop passes took minutes to compile.
+/// function held all ten of its kernels, and its loop passes took minutes to compile.
 #[cfg(target_arch = "x86_64")]
 #[inline(never)]
 fn run_sse<K: WideKernel>(k: K) -> K::Output {
