@@ -10,6 +10,7 @@ use crate::interaction::{Hit, SurfaceInteraction, SurfaceProps};
 use crate::light::{AreaLight, Emission, Light, LightSelector};
 use crate::material::{Material, MaterialId};
 use crate::math::{Point3, Ray, RayBatch, Transform, Vec3};
+use crate::sampling::guide::{Guide, MAX_GUIDES};
 use crate::sampling::pcg::hash2;
 use crate::shape::{Mesh, Shape, ShearedRay};
 use crate::spectrum::{upsample, RgbRole, SampledSpectrum, Wavelengths};
@@ -48,52 +49,30 @@ pub struct Scene {
     pub reads_uv: bool,
     /// Spheres bounding the perfectly specular objects, which diffuse vertices sample
     /// directions towards beside their cosine-weighted ones (see [`crate::sampling::guide`]).
-    pub guides: Vec<crate::sampling::guide::Guide>,
+    pub guides: Vec<Guide>,
 }
 
 /// The bounding spheres of the objects of `geometry` whose material is a perfect mirror or a
-/// smooth dielectric (the first [`crate::sampling::guide::MAX_GUIDES`]): a sphere's own,
-/// other shapes' the sphere about their bounds. (Meshes are left out.)
-fn guides_of(geometry: &Geometry, materials: &[Material]) -> Vec<crate::sampling::guide::Guide> {
-    use crate::material::Model;
-    use crate::sampling::guide::Guide;
-    let mut out = Vec::new();
-    for o in geometry.objects() {
-        let m = &materials[o.props.material as usize];
-        let delta = matches!(
-            m.model,
-            Model::Specular { .. }
-                | Model::Conductor { mf: None, .. }
-                | Model::Dielectric { mf: None, .. }
-        );
-        if !delta || out.len() == crate::sampling::guide::MAX_GUIDES {
-            continue;
-        }
-        let g = match &o.shape {
-            crate::shape::Shape::Sphere(s) => {
-                let m = &s.world_from_object;
-                let r = [Vec3::X, Vec3::Y, Vec3::Z]
-                    .iter()
-                    .map(|&a| m.vector(a).norm())
-                    .fold(0.0f32, f32::max);
-                Guide {
-                    c: m.point(crate::math::Point3::ORIGIN),
-                    r,
-                }
+/// smooth dielectric ([`crate::material::Model::is_delta`]; the first [`MAX_GUIDES`]): a
+/// sphere's own, other shapes' the sphere about their bounds. (Meshes are left out.)
+fn guides_of(geometry: &Geometry, materials: &[Material]) -> Vec<Guide> {
+    geometry
+        .objects()
+        .iter()
+        .filter(|o| materials[o.props.material as usize].model.is_delta())
+        .filter_map(|o| match &o.shape {
+            Shape::Sphere(s) => {
+                let (c, r) = s.bounding_sphere();
+                Some(Guide { c, r })
             }
-            shape => match shape.bounds() {
-                Some(b) => Guide {
-                    c: b.min + (b.max - b.min) * 0.5,
-                    r: (b.max - b.min).norm() * 0.5,
-                },
-                None => continue,
-            },
-        };
-        if g.r.is_finite() && g.r > 0.0 {
-            out.push(g);
-        }
-    }
-    out
+            shape => shape.bounds().map(|b| Guide {
+                c: b.min + (b.max - b.min) * 0.5,
+                r: (b.max - b.min).norm() * 0.5,
+            }),
+        })
+        .filter(|g| g.r.is_finite() && g.r > 0.0)
+        .take(MAX_GUIDES)
+        .collect()
 }
 
 /// The most masked surfaces a ray passes through before the next one counts as a hit.

@@ -130,6 +130,19 @@ pub enum Model {
     },
 }
 
+impl Model {
+    /// True for the models that scatter only into discrete directions: a perfect mirror, a
+    /// smooth conductor, a smooth dielectric (their BSDFs are Dirac deltas).
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            Model::Specular { .. }
+                | Model::Conductor { mf: None, .. }
+                | Model::Dielectric { mf: None, .. }
+        )
+    }
+}
+
 /// A material: a model and its sidedness.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {

@@ -140,6 +140,17 @@ impl Sphere {
         Bounds3::new(c - ext, c + ext)
     }
 
+    /// The centre and radius of a sphere (world space) around the transformed sphere: its
+    /// centre, and its longest semi-axis.
+    pub fn bounding_sphere(&self) -> (Point3, f32) {
+        let m = &self.world_from_object;
+        let r = [Vec3::X, Vec3::Y, Vec3::Z]
+            .iter()
+            .map(|&a| m.vector(a).norm())
+            .fold(0.0f32, f32::max);
+        (m.point(Point3::ORIGIN), r)
+    }
+
     /// True when the point (world space) is strictly inside.
     pub fn contains(&self, p: Point3) -> bool {
         self.world_from_object.inv_point(p).to_vec().squared_norm() < 1.0

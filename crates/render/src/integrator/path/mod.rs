@@ -19,10 +19,10 @@ use crate::interaction::Hit;
 use crate::light::ShadingPoint;
 use crate::light::{AreaShape, Light};
 use crate::material::{
-    conductor_index, relative_eta, sample_smooth, sample_specular, Distribution, IncidencePlane,
-    Model, RoughCoating, RoughPlastic,
+    conductor_index, relative_eta, sample_smooth, sample_specular, Bsdf, BsdfSample, Distribution,
+    IncidencePlane, Model, RoughCoating, RoughPlastic,
 };
-use crate::math::{lanes, Ray, RayBatch, BATCH};
+use crate::math::{lanes, Ray, RayBatch, Vec3, BATCH};
 use crate::sampling::guide::GuideCones;
 use crate::sampling::warp::power_heuristic;
 use crate::sampling::Sampler;
@@ -270,12 +270,12 @@ type LaneNumbers<'s> = (
 /// `SurfaceLanes::shade`.)
 #[inline(never)]
 fn guided_sample(
-    bsdf: &crate::material::Bsdf,
+    bsdf: &Bsdf,
     cones: &GuideCones,
-    (wo, flip): (crate::math::Vec3, bool),
+    (wo, flip): (Vec3, bool),
     u1: f32,
     u2: [f32; 2],
-) -> Option<crate::material::BsdfSample> {
+) -> Option<BsdfSample> {
     let (j, v) = cones.split(u2[0]);
     let u = [v, u2[1]];
     let wi = match j {
@@ -290,7 +290,7 @@ fn guided_sample(
     if !(pdf > 0.0) || f.is_black() {
         return None;
     }
-    Some(crate::material::BsdfSample {
+    Some(BsdfSample {
         wi,
         weight: SampledSpectrum(f.0.map(|x| x / pdf)),
         pdf,
