@@ -66,8 +66,8 @@ fn guides_of(geometry: &Geometry, materials: &[Material]) -> Vec<Guide> {
                 Some(Guide { c, r })
             }
             shape => shape.bounds().map(|b| Guide {
-                c: b.min + (b.max - b.min) * 0.5,
-                r: (b.max - b.min).norm() * 0.5,
+                c: b.centroid(),
+                r: b.diagonal().norm() * 0.5,
             }),
         })
         .filter(|g| g.r.is_finite() && g.r > 0.0)
