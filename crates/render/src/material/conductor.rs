@@ -6,8 +6,8 @@
 //! (`integrator/path/microfacet_lanes.rs`): change both.
 
 use super::fresnel::{fresnel_conductor, reflect};
-use super::microfacet::{Distribution, Microfacet};
-use super::sample::{reflection_sample, LocalSample};
+use super::microfacet::Microfacet;
+use super::sample::LocalSample;
 use crate::math::Vec3;
 use crate::spectrum::SampledSpectrum;
 
@@ -33,10 +33,7 @@ pub fn microfacet_lobe(mf: &Microfacet, wo: Vec3, wi: Vec3) -> Option<(f32, Vec3
     let h = (wo + wi).normalize();
     let d = mf.d(h);
     let g1o = mf.g1(wo, h);
-    let v = match mf.dist {
-        Distribution::Ggx => d * g1o / (4.0 * wo.z) * mf.g1(wi, h),
-        Distribution::Beckmann => d * (g1o * mf.g1(wi, h)) / (4.0 * wo.z),
-    };
+    let v = d * g1o / (4.0 * wo.z) * mf.g1(wi, h);
     (v > 0.0 && v.is_finite()).then_some((v, h))
 }
 
@@ -52,16 +49,11 @@ pub fn microfacet_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> f32 {
     if cos_oh <= 0.0 {
         return 0.0;
     }
-    let d = mf.d(h);
-    let g1o = mf.g1(wo, h);
-    match mf.dist {
-        Distribution::Ggx => d * g1o / (4.0 * wo.z),
-        Distribution::Beckmann => mf.pdf_with(wo, h, d, g1o) / (4.0 * cos_oh),
-    }
+    mf.d(h) * mf.g1(wo, h) / (4.0 * wo.z)
 }
 
 /// [`microfacet_lobe`] and [`microfacet_pdf`] of one pair at once, sharing the half vector h,
-/// D(h) and G1(wo, h). With GGX's visible normals the density is D(h)·G1(wo, h) / (4 cos θo)
+/// D(h) and G1(wo, h). With visible normals the density is D(h)·G1(wo, h) / (4 cos θo)
 /// (wo·h cancels), and the lobe is that times G1(wi, h).
 #[inline]
 pub fn microfacet_lobe_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> (Option<(f32, Vec3)>, f32) {
@@ -72,16 +64,8 @@ pub fn microfacet_lobe_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3) -> (Option<(f32,
     let d = mf.d(h);
     let g1o = mf.g1(wo, h);
     let cos_oh = wo.dot(h);
-    let (v, pdf) = match mf.dist {
-        Distribution::Ggx => {
-            let p = d * g1o / (4.0 * wo.z);
-            (p * mf.g1(wi, h), p)
-        }
-        Distribution::Beckmann => {
-            let v = d * (g1o * mf.g1(wi, h)) / (4.0 * wo.z);
-            (v, mf.pdf_with(wo, h, d, g1o) / (4.0 * cos_oh))
-        }
-    };
+    let pdf = d * g1o / (4.0 * wo.z);
+    let v = pdf * mf.g1(wi, h);
     let lobe = (v > 0.0 && v.is_finite()).then_some((v, h));
     (lobe, if cos_oh <= 0.0 { 0.0 } else { pdf })
 }
@@ -137,22 +121,18 @@ pub fn sample(
     }
     let m = mf.sample(wo, u);
     let wi = reflect(wo, m);
-    if mf.dist == Distribution::Ggx {
-        // Visible normals: the density D(m)·G1(wo, m) / (4 cos θo) and the weight
-        // f·cos θi / pdf = r·F(wo·m)·G1(wi, m), from the sampled normal itself.
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let g1i = mf.g1(wi, m);
-        let pdf = mf.d(m) * mf.g1(wo, m) / (4.0 * wo.z);
-        return (pdf > 0.0 && g1i > 0.0).then(|| LocalSample {
-            wi,
-            weight: r * conductor_fresnel(c, wo.dot(m)) * g1i,
-            pdf,
-            delta: false,
-            eta: 1.0,
-        });
+    // Visible normals: the density D(m)·G1(wo, m) / (4 cos θo) and the weight
+    // f·cos θi / pdf = r·F(wo·m)·G1(wi, m), from the sampled normal itself.
+    if wi.z <= 0.0 {
+        return None;
     }
-    let (lobe, pdf) = microfacet_lobe_pdf(mf, wo, wi);
-    reflection_sample(wi, pdf, value(c, r, wo, lobe))
+    let g1i = mf.g1(wi, m);
+    let pdf = mf.d(m) * mf.g1(wo, m) / (4.0 * wo.z);
+    (pdf > 0.0 && g1i > 0.0).then(|| LocalSample {
+        wi,
+        weight: r * conductor_fresnel(c, wo.dot(m)) * g1i,
+        pdf,
+        delta: false,
+        eta: 1.0,
+    })
 }

@@ -154,8 +154,7 @@ pub fn sample_rough(
     }
     let wo_up = if wo.z < 0.0 { -wo } else { wo };
     let m = mf.sample(wo_up, u2);
-    // Only microfacets facing wo scatter it (Beckmann samples all normals, not only the visible
-    // ones).
+    // Only microfacets facing wo scatter it (the visible normals face it, up to rounding).
     if wo.dot(m) * wo.z <= 0.0 {
         return None;
     }

@@ -2,11 +2,16 @@
 //!
 //! Directions are in the local shading frame (+z is the macro normal). `alpha` is the
 //! roughness: the RMS slope for Beckmann, the width of the Trowbridge–Reitz lobe for GGX.
-//! GGX samples the distribution of visible normals (Heitz 2018); Beckmann samples D(m)·cos θm.
+//! Both sample the distribution of visible normals: GGX by Heitz 2018's projected-disk
+//! construction, Beckmann by inverting the visible slopes' distribution (Heitz and d'Eon 2014,
+//! with Jakob 2014's Newton–bisection in the error function's range), as Mitsuba does by
+//! default. Beckmann's masking term is Smith's exact Λ (through the error function), so that
+//! the density of its visible normals integrates to 1.
 //! GGX's D, G1 and sample are repeated on sixteen lanes by the path tracer
 //! (`integrator/path/microfacet_lanes.rs`) and by the rough coating's table (`plastic.rs`):
 //! change all three.
 
+use crate::math::special::{beckmann_lambda, erf_inv, erfc_positive, erfc_scaled, FRAC_1_SQRT_PI};
 use crate::math::{Vec3, PI};
 
 /// Which normal distribution.
@@ -84,13 +89,9 @@ impl Microfacet {
                 if tan == 0.0 {
                     return 1.0;
                 }
-                // Walter et al. 2007's rational approximation of the exact Beckmann term.
-                let a = 1.0 / (self.alpha * tan);
-                if a >= 1.6 {
-                    1.0
-                } else {
-                    (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a)
-                }
+                // Smith's exact term, not Walter et al. 2007's rational approximation of it
+                // (within 0.35 %): the visible normals' density must integrate to 1.
+                1.0 / (1.0 + beckmann_lambda(1.0 / (self.alpha * tan)))
             }
             Distribution::Ggx => {
                 // 2 / (1 + √(1 + α² tan²θ)), times cos θ above and below: one square root
@@ -107,20 +108,21 @@ impl Microfacet {
         self.g1(wi, m) * self.g1(wo, m)
     }
 
-    /// Samples a microfacet normal seen from `wi` (z > 0).
+    /// Samples a microfacet normal seen from `wi` (z > 0): the distribution of the normals
+    /// `wi` sees, G1(wi, m)·max(0, wi·m)·D(m)/cos θi.
     #[inline]
     pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Vec3 {
-        self.sampler(wi)
-            .normal(self.radial(u[0]), NormalSampler::angular(u[1]))
+        let sampler = self.sampler(wi);
+        sampler.normal(sampler.radial(u[0]), self.angular(u[1]))
     }
 
     /// [`Microfacet::sample`]'s part that depends on the direction alone: to sample many
     /// normals seen from one direction (the same normals, bit for bit).
     #[inline]
     pub(crate) fn sampler(&self, wi: Vec3) -> NormalSampler {
+        let alpha = self.alpha;
         match self.dist {
             Distribution::Ggx => {
-                let alpha = self.alpha;
                 // Stretch the view direction to the hemisphere configuration.
                 let vh = Vec3::new(alpha * wi.x, alpha * wi.y, wi.z).normalize();
                 let lensq = vh.x * vh.x + vh.y * vh.y;
@@ -138,57 +140,72 @@ impl Microfacet {
                     s: 0.5 * (1.0 + vh.z),
                 }
             }
-            Distribution::Beckmann => NormalSampler::Beckmann,
-        }
-    }
-
-    /// [`Microfacet::sample`]'s part that depends on the first number alone: the radius
-    /// √u₀ on the projected disk (GGX), or (cos θm, sin θm) (Beckmann).
-    #[inline]
-    pub(crate) fn radial(&self, u0: f32) -> (f32, f32) {
-        match self.dist {
-            Distribution::Ggx => (u0.sqrt(), 0.0),
             Distribution::Beckmann => {
-                let tan2 = -self.alpha * self.alpha * (1.0 - u0).ln();
-                let ct = 1.0 / (1.0 + tan2).sqrt();
-                (ct, (1.0 - ct * ct).max(0.0).sqrt())
+                // The direction stretched to unit roughness: its azimuth and tan θ.
+                let (x, y) = (alpha * wi.x, alpha * wi.y);
+                let r = (x * x + y * y).sqrt();
+                let (cos_phi, sin_phi) = if r > 0.0 { (x / r, y / r) } else { (1.0, 0.0) };
+                let tan = r / wi.z;
+                NormalSampler::Beckmann {
+                    alpha,
+                    cos_phi,
+                    sin_phi,
+                    // (Near normal incidence the marginal is erf's own: sampled directly.)
+                    tan: if tan < 1e-4 || !tan.is_finite() {
+                        0.0
+                    } else {
+                        tan
+                    },
+                }
             }
         }
     }
 
-    /// The density of [`Microfacet::sample`] for normal `m` seen from `wi` (z > 0).
+    /// [`Microfacet::sample`]'s part that depends on the second number alone: (cos φ, sin φ)
+    /// of the azimuth 2πu₁ on GGX's projected disk, or the unit-roughness slope across the
+    /// direction's azimuth for Beckmann, erf⁻¹(2u₁ − 1) (and 0).
     #[inline]
-    pub fn pdf(&self, wi: Vec3, m: Vec3) -> f32 {
+    pub(crate) fn angular(&self, u1: f32) -> (f32, f32) {
         match self.dist {
             Distribution::Ggx => {
-                if wi.z <= 0.0 {
-                    return 0.0;
-                }
-                self.g1(wi, m) * wi.dot(m).max(0.0) * self.d(m) / wi.z
+                let (sin, cos) = crate::sampling::warp::sin_cos_turn(u1);
+                (cos, sin)
             }
-            Distribution::Beckmann => self.d(m) * m.z.max(0.0),
+            Distribution::Beckmann => (erf_inv(2.0 * u1.max(1e-6) - 1.0), 0.0),
         }
+    }
+
+    /// The density of [`Microfacet::sample`] for normal `m` seen from `wi` (z > 0):
+    /// G1(wi, m)·max(0, wi·m)·D(m)/cos θi.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3, m: Vec3) -> f32 {
+        if wi.z <= 0.0 {
+            return 0.0;
+        }
+        self.g1(wi, m) * wi.dot(m).max(0.0) * self.d(m) / wi.z
     }
 
     /// [`Microfacet::pdf`] given `d` = D(m) and `g1` = G1(wi, m), already computed: the same
     /// number, bit for bit.
     #[inline]
     pub fn pdf_with(&self, wi: Vec3, m: Vec3, d: f32, g1: f32) -> f32 {
-        match self.dist {
-            Distribution::Ggx => {
-                if wi.z <= 0.0 {
-                    return 0.0;
-                }
-                g1 * wi.dot(m).max(0.0) * d / wi.z
-            }
-            Distribution::Beckmann => d * m.z.max(0.0),
+        if wi.z <= 0.0 {
+            return 0.0;
         }
+        g1 * wi.dot(m).max(0.0) * d / wi.z
     }
 }
 
+/// Newton steps at most in the inversion of Beckmann's visible slopes (it converges in a
+/// few; the bisection that guards it halves the bracket at every step it rejects).
+const SLOPE_STEPS: usize = 32;
+
 /// [`Microfacet::sample`] split by what its parts depend on ([`Microfacet::sampler`]): the
 /// direction's frame for GGX (Heitz 2018, "Sampling the GGX Distribution of Visible Normals");
-/// nothing for Beckmann, whose normals do not depend on the direction.
+/// for Beckmann, the direction's azimuth and what the inversion of the visible slopes'
+/// distribution needs (Heitz and d'Eon 2014, "Importance Sampling Microfacet-Based BSDFs using
+/// the Distribution of Visible Normals"; Jakob 2014, "An Improved Visible Normal Sampling
+/// Routine for the Beckmann Distribution").
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum NormalSampler {
     /// GGX's visible normals seen from a direction.
@@ -204,21 +221,34 @@ pub(crate) enum NormalSampler {
         /// The share of the projected disk's half that the direction sees.
         s: f32,
     },
-    /// Beckmann: D(m)·cos θm.
-    Beckmann,
+    /// Beckmann's visible normals seen from a direction.
+    Beckmann {
+        /// Roughness.
+        alpha: f32,
+        /// The direction's azimuth.
+        cos_phi: f32,
+        /// The direction's azimuth.
+        sin_phi: f32,
+        /// tan θ of the direction stretched to unit roughness (0 near normal incidence).
+        tan: f32,
+    },
 }
 
 impl NormalSampler {
-    /// The part of a sample that depends on the second number alone: (cos φ, sin φ).
+    /// The part of a sample that depends on the first number (and the direction): the radius
+    /// √u₀ on GGX's projected disk, or the unit-roughness slope along the direction's azimuth
+    /// for Beckmann (and 0).
     #[inline]
-    pub(crate) fn angular(u1: f32) -> (f32, f32) {
-        let (sin, cos) = crate::sampling::warp::sin_cos_turn(u1);
-        (cos, sin)
+    pub(crate) fn radial(&self, u0: f32) -> (f32, f32) {
+        match *self {
+            NormalSampler::Ggx { .. } => (u0.sqrt(), 0.0),
+            NormalSampler::Beckmann { tan, .. } => (beckmann_slope(u0, tan), 0.0),
+        }
     }
 
-    /// The normal given [`Microfacet::radial`] and [`NormalSampler::angular`].
+    /// The normal given [`NormalSampler::radial`] and [`Microfacet::angular`].
     #[inline]
-    pub(crate) fn normal(&self, radial: (f32, f32), (cos_phi, sin_phi): (f32, f32)) -> Vec3 {
+    pub(crate) fn normal(&self, radial: (f32, f32), angular: (f32, f32)) -> Vec3 {
         match *self {
             NormalSampler::Ggx {
                 alpha,
@@ -227,6 +257,7 @@ impl NormalSampler {
                 t2,
                 s,
             } => {
+                let (cos_phi, sin_phi) = angular;
                 // Sample the projected area.
                 let r = radial.0;
                 let p1 = r * cos_phi;
@@ -236,18 +267,83 @@ impl NormalSampler {
                 // Unstretch.
                 Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(1e-6)).normalize()
             }
-            NormalSampler::Beckmann => {
-                let (ct, st) = radial;
-                Vec3::new(st * cos_phi, st * sin_phi, ct)
+            NormalSampler::Beckmann {
+                alpha,
+                cos_phi,
+                sin_phi,
+                ..
+            } => {
+                // The slopes (along, across the azimuth) turned to the direction's azimuth,
+                // scaled to the roughness: the normal (−x, −y, 1), normalised.
+                let (sx, sy) = (radial.0, angular.0);
+                let x = alpha * (cos_phi * sx - sin_phi * sy);
+                let y = alpha * (sin_phi * sx + cos_phi * sy);
+                Vec3::new(-x, -y, 1.0).normalize()
             }
         }
     }
+}
+
+/// The unit-roughness Beckmann slope along the azimuth of a direction of `tan` θ (0: normal
+/// incidence) that the visible slopes' marginal gives `u`: the density (cot θ − x)·e^(−x²)
+/// over x < cot θ, whose distribution function is `norm`·(1 + erf x + tan θ/√π·e^(−x²)) (from 0
+/// at −∞ to 1 at cot θ, `erf_cot` = erf(cot θ) being in `norm`) and whose derivative is
+/// `norm`·(2/√π)·e^(−x²)·(1 − x·tan θ). Newton's method from the slope at normal incidence,
+/// erf⁻¹(2u − 1), kept inside a bracket by bisection. (Jakob 2014 iterates in erf's range
+/// instead, which costs a logarithm more at every step: here a step costs one exponential,
+/// shared by erf and the density.)
+#[inline]
+fn beckmann_slope(u: f32, tan: f32) -> f32 {
+    // (u ≥ 10⁻⁶: erf⁻¹(−1) is −∞.)
+    let u = u.max(1e-6);
+    let x0 = erf_inv(2.0 * u - 1.0);
+    if tan == 0.0 {
+        return x0;
+    }
+    let cot = 1.0 / tan;
+    let k = tan * FRAC_1_SQRT_PI;
+    let norm = 1.0 / (1.0 + (1.0 - erfc_positive(cot)) + k * (-cot * cot).exp());
+    // (Below −5 the distribution function is under 10⁻⁶ for any θ: u's floor.)
+    let (mut lo, mut hi) = (-5.0f32, cot);
+    // The first guess: ln(1 − x·tan θ) − x² to second order in x is the logarithm of a
+    // Gaussian of mean −tan θ/(2 + tan²θ) and of 1 + tan²θ/2 times the precision of erf's:
+    // its quantile. (One step of Newton's method then suffices at small θ.)
+    let mut x = x0 / (1.0 + 0.5 * tan * tan).sqrt() - tan / (2.0 + tan * tan);
+    for _ in 0..SLOPE_STEPS {
+        if !(x > lo && x < hi) {
+            x = 0.5 * (lo + hi);
+        }
+        let e = (-x * x).exp();
+        let c = erfc_scaled(x.abs()) * e;
+        // 1 + erf x, without cancellation on the negative side.
+        let one_plus_erf = if x < 0.0 { c } else { 2.0 - c };
+        let value = norm * (one_plus_erf + k * e) - u;
+        if value.abs() < 1e-5 {
+            return x;
+        }
+        if value > 0.0 {
+            hi = x;
+        } else {
+            lo = x;
+        }
+        let step = value / (norm * (2.0 * FRAC_1_SQRT_PI) * e * (1.0 - x * tan));
+        // The step's residual is about |F''|·step²/2, and |F''| is about F'·(2|x| + tan θ):
+        // when that is far below the tolerance, the step is the last (unchecked when it stays
+        // in the bracket).
+        let last = value.abs() * step.abs() * (x.abs() + tan + 1.0) < 1e-6;
+        x -= step;
+        if last && x > lo && x < hi {
+            return x;
+        }
+    }
+    x.clamp(lo, hi)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::warp::square_to_uniform_hemisphere;
+    use std::f64::consts::PI as PI64;
 
     /// ∫ D(m) cos θm dωm = 1, by quadrature over the hemisphere.
     #[test]
@@ -291,6 +387,67 @@ mod tests {
             }
             let v = sum / (n * n) as f64;
             assert!((v - 0.8).abs() < 0.02, "{dist:?}: {v}");
+        }
+    }
+
+    /// Beckmann's slope along the azimuth inverts its marginal distribution: the distribution
+    /// function, evaluated in double precision, gives back the number, from normal to grazing
+    /// incidence (stretched tan θ from 10⁻³ to 10³), and the slopes grow with it.
+    #[test]
+    fn beckmann_slopes_invert_their_distribution() {
+        let erf = |x: f64| 1.0 - crate::math::special::erfc_positive(x.abs() as f32) as f64;
+        let erf = |x: f64| if x < 0.0 { -erf(-x) } else { erf(x) };
+        for tan in [1e-3f32, 0.05, 0.1, 0.3, 0.6, 1.0, 3.0, 10.0, 30.0, 1e3] {
+            let wi = Vec3::new(tan, 0.0, 1.0).normalize();
+            let NormalSampler::Beckmann { tan: t, .. } =
+                Microfacet::new(Distribution::Beckmann, 1.0).sampler(wi)
+            else {
+                unreachable!()
+            };
+            let (t64, cot) = (tan as f64, 1.0 / tan as f64);
+            let norm64 = 1.0 / (1.0 + erf(cot) + t64 / PI64.sqrt() * (-cot * cot).exp());
+            let cdf = |x: f64| norm64 * (1.0 + erf(x) + t64 / PI64.sqrt() * (-x * x).exp());
+            let mut last = f64::NEG_INFINITY;
+            let (low, high) = ([1e-6f32, 1e-5, 1e-4], [0.9999f32, 0.99999, 0.999_999]);
+            let middle = (1..1000).map(|i| i as f32 / 1000.0);
+            for u in low.into_iter().chain(middle).chain(high) {
+                let x = beckmann_slope(u, t) as f64;
+                assert!(x.is_finite() && x <= cot + 1e-6, "tan {tan}, u {u}: {x}");
+                assert!(x >= last, "tan {tan}, u {u}: not increasing");
+                last = x;
+                // (Near normal incidence, the marginal at normal incidence.)
+                let c = if t == 0.0 {
+                    0.5 * (1.0 + erf(x))
+                } else {
+                    cdf(x)
+                };
+                assert!((c - u as f64).abs() < 2e-5, "tan {tan}, u {u}: F(x) = {c}");
+            }
+        }
+    }
+
+    /// Beckmann's visible normals from a direction face it, and the normals of a narrow
+    /// distribution stay near the macro normal, from any direction.
+    #[test]
+    fn beckmann_visible_normals_face_the_direction() {
+        for alpha in [0.02f32, 0.3, 1.5] {
+            let mf = Microfacet::new(Distribution::Beckmann, alpha);
+            for th in [0.0f32, 40.0, 80.0, 89.5] {
+                let (s, c) = th.to_radians().sin_cos();
+                let wi = Vec3::new(s * 0.6, s * 0.8, c);
+                for i in 0..64 {
+                    for j in 0..64 {
+                        let u = [(i as f32 + 0.5) / 64.0, (j as f32 + 0.5) / 64.0];
+                        let m = mf.sample(wi, u);
+                        assert!((m.dot(m) - 1.0).abs() < 1e-5, "{m:?}");
+                        assert!(wi.dot(m) >= -1e-6, "α {alpha} θ {th}: {m:?}");
+                        assert!(mf.pdf(wi, m) > 0.0 || wi.dot(m) <= 1e-6, "α {alpha} θ {th}");
+                        if alpha == 0.02 {
+                            assert!(m.z > 0.99, "α {alpha} θ {th}: {m:?}");
+                        }
+                    }
+                }
+            }
         }
     }
 }

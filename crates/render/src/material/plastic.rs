@@ -19,6 +19,7 @@ use super::fresnel::{
 };
 use super::microfacet::{Distribution, Microfacet, NormalSampler};
 use super::sample::{reflection_sample, specular_probability, LocalSample};
+use crate::math::special::beckmann_lambda;
 use crate::math::{Vec3, INV_PI, PI};
 use crate::sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use crate::simd::F4;
@@ -121,8 +122,8 @@ impl RoughCoating {
         // What the sampled normals share along a row or a column of the strata, computed once
         // for every entry.
         let u = |i: usize| (i as f32 + 0.5) / STRATA as f32;
-        let radial: [(f32, f32); STRATA] = std::array::from_fn(|i| mf.radial(u(i)));
-        let angular: [(f32, f32); STRATA] = std::array::from_fn(|j| NormalSampler::angular(u(j)));
+        let strata: [f32; STRATA] = std::array::from_fn(u);
+        let angular: [(f32, f32); STRATA] = std::array::from_fn(|j| mf.angular(u(j)));
         let lanes: [[[f32; 4]; 2]; STRATA / 4] = std::array::from_fn(|k| {
             let a = |j: usize| angular[4 * k + j];
             [
@@ -135,9 +136,9 @@ impl RoughCoating {
             .into_par_iter()
             .map(|i| {
                 if eta == 1.0 {
-                    coating_entry(&mf, eta, mu(i), &radial, &angular)
+                    coating_entry(&mf, eta, mu(i), &strata, &angular)
                 } else {
-                    coating_entry_lanes(&mf, eta, mu(i), &radial, &lanes)
+                    coating_entry_lanes(&mf, eta, mu(i), &strata, &lanes)
                 }
             })
             .collect();
@@ -169,22 +170,23 @@ impl RoughCoating {
 const STRATA: usize = 48;
 
 /// [`coating_transmittance`] and [`specular_albedo`] (seen from inside, relative index
-/// 1/`eta`) at cos θ = `mu` at once, over the same normals, given the parts of the normals that
-/// depend on one stratum number alone ([`Microfacet::radial`], [`NormalSampler::angular`]):
+/// 1/`eta`) at cos θ = `mu` at once, over the same normals, given the strata's numbers and the
+/// part of the normals that depends on the second number alone ([`Microfacet::angular`]):
 /// the same numbers, bit for bit.
 fn coating_entry(
     mf: &Microfacet,
     eta: f32,
     mu: f32,
-    radial: &[(f32, f32); STRATA],
+    strata: &[f32; STRATA],
     angular: &[(f32, f32); STRATA],
 ) -> (f32, f32) {
     let w = direction(mu);
     let sampler = mf.sampler(w);
+    let radial = strata.map(|u| sampler.radial(u));
     let g1w = mf.g1_visible(w);
     let eta_inside = 1.0 / eta;
     let (mut t, mut a) = (0f64, 0f64);
-    for &r in radial {
+    for r in radial {
         for &phi in angular {
             let m = sampler.normal(r, phi);
             t += transmitted(mf, eta, w, m, g1w) as f64;
@@ -202,16 +204,17 @@ fn coating_entry_lanes(
     mf: &Microfacet,
     eta: f32,
     mu: f32,
-    radial: &[(f32, f32); STRATA],
+    strata: &[f32; STRATA],
     angular: &[[[f32; 4]; 2]; STRATA / 4],
 ) -> (f32, f32) {
     let w = direction(mu);
     let sampler = mf.sampler(w);
+    let radial = strata.map(|u| sampler.radial(u));
     let g1w = F4::splat(mf.g1_visible(w));
     let wv = V3::splat(w);
     let eta_inside = 1.0 / eta;
     let (mut t, mut a) = (0f64, 0f64);
-    for &r in radial {
+    for r in radial {
         for [cos, sin] in angular {
             let m = normal_lanes(&sampler, r, F4::load(cos), F4::load(sin));
             let cos_i = wv.dot(m);
@@ -273,7 +276,8 @@ fn or(mask: F4, b: F4) -> F4 {
     F4::select(mask, mask, b)
 }
 
-/// [`NormalSampler::normal`] for four second numbers.
+/// [`NormalSampler::normal`] for four second numbers ([`Microfacet::angular`]'s two parts in
+/// lanes).
 #[inline(always)]
 fn normal_lanes(sampler: &NormalSampler, radial: (f32, f32), cos_phi: F4, sin_phi: F4) -> V3 {
     let (zero, one) = (F4::splat(0.0), F4::splat(1.0));
@@ -302,13 +306,23 @@ fn normal_lanes(sampler: &NormalSampler, radial: (f32, f32), cos_phi: F4, sin_ph
             }
             .normalize()
         }
-        NormalSampler::Beckmann => {
-            let (ct, st) = radial;
+        NormalSampler::Beckmann {
+            alpha,
+            cos_phi: c,
+            sin_phi: s,
+            ..
+        } => {
+            // (`cos_phi` holds the slopes across the azimuth.)
+            let (sx, sy) = (F4::splat(radial.0), cos_phi);
+            let (c, s, a) = (F4::splat(c), F4::splat(s), F4::splat(alpha));
+            let x = a.mul(c.mul(sx).sub(s.mul(sy)));
+            let y = a.mul(s.mul(sx).add(c.mul(sy)));
             V3 {
-                x: F4::splat(st).mul(cos_phi),
-                y: F4::splat(st).mul(sin_phi),
-                z: F4::splat(ct),
+                x: x.neg(),
+                y: y.neg(),
+                z: one,
             }
+            .normalize()
         }
     }
 }
@@ -346,15 +360,8 @@ fn g1_lanes(mf: &Microfacet, w: V3, m: V3) -> F4 {
     let g = match mf.dist {
         Distribution::Beckmann => {
             let tan = one.sub(ct.mul(ct)).max_keep(zero).sqrt().div(ct);
-            let a = one.div(alpha.mul(tan));
-            let r = F4::splat(3.535)
-                .mul(a)
-                .add(F4::splat(2.181).mul(a).mul(a))
-                .div(
-                    one.add(F4::splat(2.276).mul(a))
-                        .add(F4::splat(2.577).mul(a).mul(a)),
-                );
-            let r = F4::select(F4::splat(1.6).le_mask(a), one, r);
+            let a = one.div(alpha.mul(tan)).to_array();
+            let r = one.div(one.add(F4::load(&a.map(beckmann_lambda))));
             F4::select(tan.eq_mask(zero), one, r)
         }
         Distribution::Ggx => {
@@ -391,13 +398,9 @@ fn transmitted_lanes(mf: &Microfacet, eta: f32, wi: V3, m: V3, cos_i: F4, g1w: F
     let zero = F4::splat(0.0);
     let g1 = F4::select(cos_i.mul(wi.z).le_mask(zero), zero, g1w);
     let d = d_lanes(mf, m.z);
-    let (q, visible) = match mf.dist {
-        Distribution::Ggx => {
-            let q = g1.mul(cos_i.max_keep(zero)).mul(d).div(wi.z);
-            (q, q)
-        }
-        Distribution::Beckmann => (d.mul(m.z.max_keep(zero)), g1.mul(cos_i).mul(d).div(wi.z)),
-    };
+    // (The density of the visible normals: the normals' own.)
+    let q = g1.mul(cos_i.max_keep(zero)).mul(d).div(wi.z);
+    let visible = q;
     let (f, cos_t) = fresnel_lanes(cos_i, eta);
     let eta_ti = F4::splat(1.0 / eta);
     let k = cos_i.mul(eta_ti).add(cos_t);
@@ -440,11 +443,11 @@ fn reflected_lanes(mf: &Microfacet, eta: f32, wo: V3, m: V3, cos_i: F4, g1w: F4)
     let v = d
         .mul(g1o.mul(g1_lanes(mf, wi, h)))
         .div(F4::splat(4.0).mul(wo.z));
-    let pdf = match mf.dist {
-        Distribution::Ggx => g1o.mul(cos_oh.max_keep(zero)).mul(d).div(wo.z),
-        Distribution::Beckmann => d.mul(h.z.max_keep(zero)),
-    }
-    .div(F4::splat(4.0).mul(cos_oh));
+    let pdf = g1o
+        .mul(cos_oh.max_keep(zero))
+        .mul(d)
+        .div(wo.z)
+        .div(F4::splat(4.0).mul(cos_oh));
     let ok = and(
         and(zero.lt_mask(wi.z), zero.lt_mask(cos_oh)),
         and(
@@ -473,15 +476,10 @@ fn transmitted(mf: &Microfacet, eta: f32, wi: Vec3, m: Vec3, g1w: f32) -> f32 {
     let cos_i = wi.dot(m);
     let g1 = if cos_i * wi.z <= 0.0 { 0.0 } else { g1w };
     let d = mf.d(m);
-    // The density of the normal and of the visible normals (for GGX one and the same number,
-    // as `Microfacet::pdf` computes it).
-    let (q, visible) = match mf.dist {
-        Distribution::Ggx => {
-            let q = g1 * cos_i.max(0.0) * d / wi.z;
-            (q, q)
-        }
-        Distribution::Beckmann => (d * m.z.max(0.0), g1 * cos_i * d / wi.z),
-    };
+    // The density of the sampled normal, which is that of the visible normals (as
+    // `Microfacet::pdf` computes it).
+    let q = g1 * cos_i.max(0.0) * d / wi.z;
+    let visible = q;
     if !(q > 0.0) || cos_i <= 0.0 {
         return 0.0;
     }
@@ -704,18 +702,13 @@ mod tests {
                 if let Some(s) = conductor::sample(&mf, None, ks, wo, u2) {
                     let pdf = conductor::microfacet_pdf(&mf, wo, s.wi);
                     let w = conductor::eval(&mf, None, ks, wo, s.wi) / pdf;
-                    if dist == Distribution::Beckmann {
-                        assert_eq!(s.pdf.to_bits(), pdf.to_bits());
-                        assert_eq!(s.weight.0.map(f32::to_bits), w.0.map(f32::to_bits));
-                    } else {
-                        // GGX's sample takes its density and weight from the sampled normal m
-                        // rather than from the half vector of wo and wi, the same up to the
-                        // rounding of h = (wo + wi)/|wo + wi|.
-                        let near = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b.abs();
-                        assert!(near(s.pdf, pdf), "{} {pdf}", s.pdf);
-                        for (a, b) in s.weight.0.into_iter().zip(w.0) {
-                            assert!(near(a, b), "{a} {b}");
-                        }
+                    // The sample takes its density and weight from the sampled normal m rather
+                    // than from the half vector of wo and wi, the same up to the rounding of
+                    // h = (wo + wi)/|wo + wi|.
+                    let near = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b.abs();
+                    assert!(near(s.pdf, pdf), "{dist:?} {} {pdf}", s.pdf);
+                    for (a, b) in s.weight.0.into_iter().zip(w.0) {
+                        assert!(near(a, b), "{dist:?} {a} {b}");
                     }
                 }
             }

@@ -5,6 +5,7 @@ mod bounds;
 mod frame;
 mod ray;
 mod ray_batch;
+pub mod special;
 mod transform;
 mod vector;
 
