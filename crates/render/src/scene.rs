@@ -518,13 +518,16 @@ impl SceneBuilder {
     /// surface, at half the intersection tests, and a rectangle light sampled by its area
     /// (the Lambert lanes sample it themselves) instead of a mesh light. An emissive mesh is
     /// taken for a parallelogram only when it is one (several would become as many lights,
-    /// chosen uniformly rather than by their areas). Scene files' meshes come this way.
+    /// chosen uniformly rather than by their areas). Nor is a mesh whose material turns with
+    /// the tangent ([`crate::material::Material::reads_tangent`]): a parallelogram's tangent is
+    /// its edge, a mesh's its texture coordinates' or its normal's basis. Scene files' meshes
+    /// come this way.
     pub fn add_mesh_or_parallelograms(&mut self, mesh: Mesh) -> &mut Self {
         let props = mesh.props;
         let flat_look = self
             .materials
             .get(props.material as usize)
-            .is_some_and(|m| !m.reads_uv())
+            .is_some_and(|m| !m.reads_uv() && !m.reads_tangent())
             && props.emission.is_none_or(|e| {
                 self.emissions
                     .get(e as usize)

@@ -109,6 +109,74 @@ fn mf(dist: Distribution, alpha: f32) -> Microfacet {
     Microfacet::new(dist, alpha)
 }
 
+/// A two-sided rough gold conductor.
+fn rough_gold(m: Microfacet) -> Material {
+    Material::two_sided(Model::Conductor {
+        eta_k: gold(),
+        reflectance: tex(1.0),
+        mf: Some(m),
+    })
+}
+
+/// The χ² case of a white rough dielectric of index `eta` seen from `wo` (mirrored below the
+/// surface when `inside`). Two grids: one around the mirror direction, one around the
+/// refracted direction (the normal under total internal reflection); for `wide` lobes, one
+/// equal-area grid around the normal covers both.
+fn glass_case(
+    label: &str,
+    eta: f32,
+    m: Microfacet,
+    mut wo: Vec3,
+    inside: bool,
+    wide: bool,
+) -> Case {
+    if inside {
+        wo.z = -wo.z;
+    }
+    let t_axis = refract_z(wo, eta).unwrap_or(if inside { Vec3::Z } else { -Vec3::Z });
+    let grids = if wide {
+        vec![(Vec3::Z, 1.0)]
+    } else {
+        vec![(reflect_z(wo), 2.0), (t_axis, 2.0)]
+    };
+    let side = if inside { "inside" } else { "outside" };
+    Case {
+        family: if inside {
+            Family::DielectricInside
+        } else {
+            Family::Dielectric
+        },
+        name: format!(
+            "rough dielectric {label} {side} θo={}°",
+            wo.z.abs().acos().to_degrees().round()
+        ),
+        material: rough_glass(eta, m),
+        wo,
+        grids,
+        mass: None,
+    }
+}
+
+/// A two-sided ideal (white, lossless Fresnel) rough conductor.
+fn ideal_rough(m: Microfacet) -> Material {
+    Material::two_sided(Model::Conductor {
+        eta_k: None,
+        reflectance: tex(1.0),
+        mf: Some(m),
+    })
+}
+
+/// A two-sided white rough dielectric of relative index `eta`.
+fn rough_glass(eta: f32, m: Microfacet) -> Material {
+    Material::two_sided(Model::Dielectric {
+        dispersion: None,
+        eta,
+        reflectance: tex(1.0),
+        transmittance: tex(1.0),
+        mf: Some(m),
+    })
+}
+
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Family {
     Lambert,
@@ -171,15 +239,33 @@ fn cases() -> Vec<Case> {
                 v.push(Case {
                     family: Family::Conductor,
                     name: format!("rough conductor {dn} α={alpha} θo={th}°"),
-                    material: Material::two_sided(Model::Conductor {
-                        eta_k: gold(),
-                        reflectance: tex(1.0),
-                        mf: Some(mf(dist, alpha)),
-                    }),
+                    material: rough_gold(mf(dist, alpha)),
                     wo,
                     grids: vec![(reflect_z(wo), power(alpha < 0.5))],
                     mass: None,
                 });
+            }
+        }
+    }
+    // Anisotropic roughness (αu along the frame's x, αv along y), seen from azimuths that
+    // are neither axis: conductors, and dielectrics from outside and from inside.
+    for (dist, dn) in dists {
+        for (au, av) in [(0.1f32, 0.4f32), (0.5, 0.15)] {
+            let m = Microfacet::anisotropic(dist, au, av);
+            for th in ANGLES {
+                let wo = local(th, 35.0);
+                v.push(Case {
+                    family: Family::Conductor,
+                    name: format!("rough conductor {dn} αu={au} αv={av} θo={th}°"),
+                    material: rough_gold(m),
+                    wo,
+                    grids: vec![(reflect_z(wo), 2.0)],
+                    mass: None,
+                });
+                for inside in [false, true] {
+                    let label = format!("{dn} αu={au} αv={av}");
+                    v.push(glass_case(&label, ETA, m, local(th, 120.0), inside, false));
+                }
             }
         }
     }
@@ -194,39 +280,16 @@ fn cases() -> Vec<Case> {
                     continue;
                 }
                 for th in ANGLES {
-                    let mut wo = local(th, 20.0);
-                    if inside {
-                        wo.z = -wo.z;
-                    }
-                    let t_axis =
-                        refract_z(wo, eta).unwrap_or(if inside { Vec3::Z } else { -Vec3::Z });
-                    // Wide lobes: one equal-area grid around the normal covers both.
-                    let grids = if alpha < 0.5 {
-                        vec![(reflect_z(wo), 2.0), (t_axis, 2.0)]
-                    } else {
-                        vec![(Vec3::Z, 1.0)]
-                    };
-                    v.push(Case {
-                        family: if inside {
-                            Family::DielectricInside
-                        } else {
-                            Family::Dielectric
-                        },
-                        name: format!(
-                            "rough dielectric {dn} α={alpha} η={eta:.4} {} θo={th}°",
-                            if inside { "inside" } else { "outside" }
-                        ),
-                        material: Material::two_sided(Model::Dielectric {
-                            dispersion: None,
-                            eta,
-                            reflectance: tex(1.0),
-                            transmittance: tex(1.0),
-                            mf: Some(mf(dist, alpha)),
-                        }),
-                        wo,
-                        grids,
-                        mass: None,
-                    });
+                    let label = format!("{dn} α={alpha} η={eta:.4}");
+                    let m = mf(dist, alpha);
+                    v.push(glass_case(
+                        &label,
+                        eta,
+                        m,
+                        local(th, 20.0),
+                        inside,
+                        alpha >= 0.5,
+                    ));
                 }
             }
         }
@@ -849,26 +912,30 @@ fn energy_conservation() {
         (Distribution::Beckmann, "beckmann"),
         (Distribution::Ggx, "ggx"),
     ] {
+        for (au, av) in [(0.05f32, 0.5f32), (0.7, 0.2)] {
+            let m = Microfacet::anisotropic(dist, au, av);
+            let label = format!("{dn} αu={au} αv={av}");
+            models.push((
+                format!("ideal rough conductor {label}"),
+                ideal_rough(m),
+                0.0,
+            ));
+            models.push((
+                format!("rough dielectric {label}"),
+                rough_glass(ETA, m),
+                0.0,
+            ));
+        }
         for alpha in [0.1f32, 0.3, 0.7] {
-            let m = Some(mf(dist, alpha));
+            let m = mf(dist, alpha);
             models.push((
                 format!("ideal rough conductor {dn} α={alpha}"),
-                white(Model::Conductor {
-                    eta_k: None,
-                    reflectance: tex(1.0),
-                    mf: m,
-                }),
+                ideal_rough(m),
                 0.0,
             ));
             models.push((
                 format!("rough dielectric {dn} α={alpha}"),
-                white(Model::Dielectric {
-                    dispersion: None,
-                    eta: ETA,
-                    reflectance: tex(1.0),
-                    transmittance: tex(1.0),
-                    mf: m,
-                }),
+                rough_glass(ETA, m),
                 0.0,
             ));
             models.push((

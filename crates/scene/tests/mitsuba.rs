@@ -630,6 +630,21 @@ fn bsdfs_and_presets() {
         mf,
         candela_render::material::Microfacet::new(candela_render::material::Distribution::Ggx, 0.3)
     );
+    // Anisotropic roughness along u and v (Beckmann by default).
+    let m = first_material(&bsdf(
+        r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.4"/></bsdf>"#,
+    ));
+    let Model::Conductor { mf: Some(mf), .. } = m.model else {
+        panic!()
+    };
+    assert_eq!(
+        mf,
+        candela_render::material::Microfacet::anisotropic(
+            candela_render::material::Distribution::Beckmann,
+            0.05,
+            0.4
+        )
+    );
     // Dielectrics: bk7 in air by default; named or numeric indices.
     let m = first_material(&bsdf(r#"<bsdf type="dielectric"/>"#));
     let Model::Dielectric { eta, mf: None, .. } = m.model else {
@@ -688,9 +703,9 @@ fn bsdfs_and_presets() {
     );
     assert_error_starts_with(
         &bsdf(
-            r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+            r#"<bsdf type="roughplastic"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.2"/></bsdf>"#,
         ),
-        "2:50: anisotropic roughness",
+        "2:48: roughplastic is isotropic",
     );
     assert_error_starts_with(
         &bsdf(r#"<bsdf type="principled"/>"#),

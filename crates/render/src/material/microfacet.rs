@@ -1,7 +1,11 @@
 //! Microfacet normal distributions (Beckmann, GGX) with Smith shadowing-masking.
 //!
 //! Directions are in the local shading frame (+z is the macro normal). `alpha` is the
-//! roughness: the RMS slope for Beckmann, the width of the Trowbridge–Reitz lobe for GGX.
+//! roughness: the RMS slope for Beckmann, the width of the Trowbridge–Reitz lobe for GGX;
+//! anisotropic distributions have one along each tangent of the frame (`alpha` along x,
+//! `alpha_v` along y: Mitsuba's `alpha_u`, `alpha_v`), and are stretched versions of the
+//! isotropic one of roughness 1, whose formulas they take with the roughness along a
+//! direction's azimuth.
 //! Both sample the distribution of visible normals: GGX by Heitz 2018's projected-disk
 //! construction, Beckmann by inverting the visible slopes' distribution (Heitz and d'Eon 2014,
 //! with Jakob 2014's Newton–bisection in the error function's range), as Mitsuba does by
@@ -23,22 +27,53 @@ pub enum Distribution {
     Ggx,
 }
 
-/// An isotropic microfacet distribution.
+/// A microfacet distribution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
     /// The distribution.
     pub dist: Distribution,
-    /// Roughness α (clamped away from 0).
+    /// Roughness α (clamped away from 0); along the frame's x axis when anisotropic.
     pub alpha: f32,
+    /// Roughness along the frame's y axis: `alpha` when isotropic.
+    pub alpha_v: f32,
 }
 
 impl Microfacet {
-    /// A distribution with roughness `alpha` (clamped to ≥ 1e-4).
+    /// An isotropic distribution with roughness `alpha` (clamped to ≥ 1e-4).
     pub fn new(dist: Distribution, alpha: f32) -> Self {
+        let alpha = alpha.max(1e-4);
         Self {
             dist,
-            alpha: alpha.max(1e-4),
+            alpha,
+            alpha_v: alpha,
         }
+    }
+
+    /// A distribution with roughness `alpha_u` along the shading frame's x axis (the surface's
+    /// ∂p/∂u) and `alpha_v` along its y axis (each clamped to ≥ 1e-4).
+    pub fn anisotropic(dist: Distribution, alpha_u: f32, alpha_v: f32) -> Self {
+        Self {
+            dist,
+            alpha: alpha_u.max(1e-4),
+            alpha_v: alpha_v.max(1e-4),
+        }
+    }
+
+    /// True when the roughness is the same in every direction.
+    #[inline]
+    pub fn is_isotropic(&self) -> bool {
+        self.alpha == self.alpha_v
+    }
+
+    /// The roughness along the azimuth of `w`: √(αu²·cos²φ + αv²·sin²φ).
+    #[inline]
+    fn alpha_towards(&self, w: Vec3) -> f32 {
+        let r2 = w.x * w.x + w.y * w.y;
+        if self.is_isotropic() || !(r2 > 0.0) {
+            return self.alpha;
+        }
+        let (ax, ay) = (self.alpha * w.x, self.alpha_v * w.y);
+        ((ax * ax + ay * ay) / r2).sqrt()
     }
 
     /// The density of normals D(m) (per unit solid angle of m, projected: ∫D(m) cos θm dm = 1).
@@ -49,6 +84,9 @@ impl Microfacet {
             return 0.0;
         }
         let ct2 = ct * ct;
+        if !self.is_isotropic() {
+            return self.d_anisotropic(m);
+        }
         let a2 = self.alpha * self.alpha;
         let r = match self.dist {
             Distribution::Beckmann => {
@@ -63,6 +101,25 @@ impl Microfacet {
             }
         };
         if r * ct > 1e-20 {
+            r
+        } else {
+            0.0
+        }
+    }
+
+    /// [`Microfacet::d`] of an anisotropic distribution (`m.z` > 0).
+    fn d_anisotropic(&self, m: Vec3) -> f32 {
+        let (ax, ay) = (self.alpha, self.alpha_v);
+        let (x, y) = (m.x / ax, m.y / ay);
+        let ct2 = m.z * m.z;
+        let r = match self.dist {
+            Distribution::Beckmann => (-(x * x + y * y) / ct2).exp() / (PI * ax * ay * ct2 * ct2),
+            Distribution::Ggx => {
+                let k = x * x + y * y + ct2;
+                1.0 / (PI * ax * ay * k * k)
+            }
+        };
+        if r * m.z > 1e-20 {
             r
         } else {
             0.0
@@ -91,12 +148,13 @@ impl Microfacet {
                 }
                 // Smith's exact term, not Walter et al. 2007's rational approximation of it
                 // (within 0.35 %): the visible normals' density must integrate to 1.
-                1.0 / (1.0 + beckmann_lambda(1.0 / (self.alpha * tan)))
+                1.0 / (1.0 + beckmann_lambda(1.0 / (self.alpha_towards(w) * tan)))
             }
             Distribution::Ggx => {
                 // 2 / (1 + √(1 + α² tan²θ)), times cos θ above and below: one square root
                 // and one division (0 at grazing, 1 at normal incidence up to rounding).
-                let a2 = self.alpha * self.alpha;
+                let a = self.alpha_towards(w);
+                let a2 = a * a;
                 (2.0 * ct) / (ct + (a2 + (1.0 - a2) * (ct * ct)).sqrt())
             }
         }
@@ -120,11 +178,11 @@ impl Microfacet {
     /// normals seen from one direction (the same normals, bit for bit).
     #[inline]
     pub(crate) fn sampler(&self, wi: Vec3) -> NormalSampler {
-        let alpha = self.alpha;
+        let (alpha, alpha_v) = (self.alpha, self.alpha_v);
         match self.dist {
             Distribution::Ggx => {
                 // Stretch the view direction to the hemisphere configuration.
-                let vh = Vec3::new(alpha * wi.x, alpha * wi.y, wi.z).normalize();
+                let vh = Vec3::new(alpha * wi.x, alpha_v * wi.y, wi.z).normalize();
                 let lensq = vh.x * vh.x + vh.y * vh.y;
                 let t1 = if lensq > 0.0 {
                     Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt()
@@ -134,6 +192,7 @@ impl Microfacet {
                 let t2 = vh.cross(t1);
                 NormalSampler::Ggx {
                     alpha,
+                    alpha_v,
                     vh,
                     t1,
                     t2,
@@ -142,12 +201,13 @@ impl Microfacet {
             }
             Distribution::Beckmann => {
                 // The direction stretched to unit roughness: its azimuth and tan θ.
-                let (x, y) = (alpha * wi.x, alpha * wi.y);
+                let (x, y) = (alpha * wi.x, alpha_v * wi.y);
                 let r = (x * x + y * y).sqrt();
                 let (cos_phi, sin_phi) = if r > 0.0 { (x / r, y / r) } else { (1.0, 0.0) };
                 let tan = r / wi.z;
                 NormalSampler::Beckmann {
                     alpha,
+                    alpha_v,
                     cos_phi,
                     sin_phi,
                     // (Near normal incidence the marginal is erf's own: sampled directly.)
@@ -210,8 +270,10 @@ const SLOPE_STEPS: usize = 32;
 pub(crate) enum NormalSampler {
     /// GGX's visible normals seen from a direction.
     Ggx {
-        /// Roughness.
+        /// Roughness along x.
         alpha: f32,
+        /// Roughness along y.
+        alpha_v: f32,
         /// The stretched direction.
         vh: Vec3,
         /// A frame around it.
@@ -223,8 +285,10 @@ pub(crate) enum NormalSampler {
     },
     /// Beckmann's visible normals seen from a direction.
     Beckmann {
-        /// Roughness.
+        /// Roughness along x.
         alpha: f32,
+        /// Roughness along y.
+        alpha_v: f32,
         /// The direction's azimuth.
         cos_phi: f32,
         /// The direction's azimuth.
@@ -252,6 +316,7 @@ impl NormalSampler {
         match *self {
             NormalSampler::Ggx {
                 alpha,
+                alpha_v,
                 vh,
                 t1,
                 t2,
@@ -265,10 +330,11 @@ impl NormalSampler {
                 p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
                 let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
                 // Unstretch.
-                Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(1e-6)).normalize()
+                Vec3::new(alpha * nh.x, alpha_v * nh.y, nh.z.max(1e-6)).normalize()
             }
             NormalSampler::Beckmann {
                 alpha,
+                alpha_v,
                 cos_phi,
                 sin_phi,
                 ..
@@ -277,7 +343,7 @@ impl NormalSampler {
                 // scaled to the roughness: the normal (−x, −y, 1), normalised.
                 let (sx, sy) = (radial.0, angular.0);
                 let x = alpha * (cos_phi * sx - sin_phi * sy);
-                let y = alpha * (sin_phi * sx + cos_phi * sy);
+                let y = alpha_v * (sin_phi * sx + cos_phi * sy);
                 Vec3::new(-x, -y, 1.0).normalize()
             }
         }
@@ -345,48 +411,53 @@ mod tests {
     use crate::sampling::warp::square_to_uniform_hemisphere;
     use std::f64::consts::PI as PI64;
 
+    /// The distributions of the tests: isotropic and anisotropic, both kinds.
+    fn distributions() -> Vec<Microfacet> {
+        let mut v = Vec::new();
+        for dist in [Distribution::Beckmann, Distribution::Ggx] {
+            for alpha in [0.1f32, 0.3, 0.8] {
+                v.push(Microfacet::new(dist, alpha));
+            }
+            v.push(Microfacet::anisotropic(dist, 0.1, 0.5));
+            v.push(Microfacet::anisotropic(dist, 0.7, 0.2));
+        }
+        v
+    }
+
+    /// ∫ f(m) dωm over the hemisphere, by the midpoint rule on 1024² cells of equal area.
+    fn over_hemisphere(f: impl Fn(Vec3) -> f32) -> f64 {
+        let n = 1024;
+        let mut sum = 0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
+                sum += f(square_to_uniform_hemisphere(u)) as f64;
+            }
+        }
+        sum * 2.0 * std::f64::consts::PI / (n * n) as f64
+    }
+
     /// ∫ D(m) cos θm dωm = 1, by quadrature over the hemisphere.
     #[test]
     fn distributions_are_normalised() {
-        for dist in [Distribution::Beckmann, Distribution::Ggx] {
-            for alpha in [0.1f32, 0.3, 0.8] {
-                let n = 1024;
-                let mut sum = 0f64;
-                for i in 0..n {
-                    for j in 0..n {
-                        let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
-                        let m = square_to_uniform_hemisphere(u);
-                        sum += (Microfacet::new(dist, alpha).d(m) * m.z) as f64
-                            * 2.0
-                            * std::f64::consts::PI;
-                    }
-                }
-                let mean = sum / (n * n) as f64;
-                assert!((mean - 1.0).abs() < 0.02, "{dist:?} α = {alpha}: {mean}");
-            }
+        for mf in distributions() {
+            let mean = over_hemisphere(|m| mf.d(m) * m.z);
+            assert!((mean - 1.0).abs() < 0.02, "{mf:?}: {mean}");
         }
     }
 
     /// The projected area of visible normals equals the projected area of the macro surface:
-    /// ∫ G1(w, m) max(0, w·m) D(m) dωm = w.z.
+    /// ∫ G1(w, m) max(0, w·m) D(m) dωm = w.z, from directions off the frame's axes.
     #[test]
     fn visible_normals_integrate_to_the_projected_area() {
-        for dist in [Distribution::Beckmann, Distribution::Ggx] {
-            let mf = Microfacet::new(dist, 0.4);
-            let w = Vec3::new(0.6, 0.0, 0.8);
-            let n = 1024;
-            let mut sum = 0f64;
-            for i in 0..n {
-                for j in 0..n {
-                    let u = [(i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32];
-                    let m = square_to_uniform_hemisphere(u);
-                    sum += (mf.g1(w, m) * w.dot(m).max(0.0) * mf.d(m)) as f64
-                        * 2.0
-                        * std::f64::consts::PI;
-                }
+        for mf in distributions().into_iter().filter(|m| m.alpha_v >= 0.2) {
+            for w in [
+                Vec3::new(0.6, 0.0, 0.8),
+                Vec3::new(0.5, 0.6, 0.39f32.sqrt()),
+            ] {
+                let v = over_hemisphere(|m| mf.g1(w, m) * w.dot(m).max(0.0) * mf.d(m));
+                assert!((v - w.z as f64).abs() < 0.01, "{mf:?} {w:?}: {v}");
             }
-            let v = sum / (n * n) as f64;
-            assert!((v - 0.8).abs() < 0.02, "{dist:?}: {v}");
         }
     }
 

@@ -309,6 +309,18 @@ impl Material {
         model || self.opacity.as_ref().is_some_and(varies)
     }
 
+    /// True when the material's response turns with the surface's tangent (∂p/∂u), not only
+    /// with its normal: an anisotropic microfacet distribution. Such a surface keeps the
+    /// tangent its shape defines (a mesh stays a mesh: see `SceneBuilder::add_mesh_or_parallelograms`).
+    pub fn reads_tangent(&self) -> bool {
+        match &self.model {
+            Model::Conductor { mf: Some(mf), .. } | Model::Dielectric { mf: Some(mf), .. } => {
+                !mf.is_isotropic()
+            }
+            _ => false,
+        }
+    }
+
     /// Readies the material for spectral rendering: uniform colours are upsampled once, here,
     /// rather than at every hit (see [`Texture::prepare_spectral`]).
     pub fn prepare_spectral(&mut self) {

@@ -115,8 +115,15 @@ pub struct RoughCoating {
 }
 
 impl RoughCoating {
-    /// Tabulates the coating (numerical integration over its microfacet normals).
+    /// Tabulates the coating (numerical integration over its microfacet normals). The table
+    /// is over cos θ alone, so the coating is isotropic: an anisotropic `mf` is taken at the
+    /// geometric mean of its two roughnesses (Mitsuba's `roughplastic` has one `alpha`).
     pub fn new(mf: Microfacet, eta: f32) -> Self {
+        let mf = if mf.is_isotropic() {
+            mf
+        } else {
+            Microfacet::new(mf.dist, (mf.alpha * mf.alpha_v).sqrt())
+        };
         use rayon::prelude::*;
         let mu = |i: usize| (i as f32 / (TABLE - 1) as f32).max(1e-6);
         // What the sampled normals share along a row or a column of the strata, computed once
@@ -284,6 +291,7 @@ fn normal_lanes(sampler: &NormalSampler, radial: (f32, f32), cos_phi: F4, sin_ph
     match *sampler {
         NormalSampler::Ggx {
             alpha,
+            alpha_v,
             vh,
             t1,
             t2,
@@ -298,25 +306,31 @@ fn normal_lanes(sampler: &NormalSampler, radial: (f32, f32), cos_phi: F4, sin_ph
             let sq = one.sub(p1.mul(p1)).sub(p2.mul(p2)).max_keep(zero).sqrt();
             let (t1, t2, vh) = (V3::splat(t1), V3::splat(t2), V3::splat(vh));
             let c = |a: F4, b: F4, v: F4| a.mul(p1).add(b.mul(p2)).add(v.mul(sq));
-            let a = F4::splat(alpha);
+            let (a, av) = (F4::splat(alpha), F4::splat(alpha_v));
             V3 {
                 x: a.mul(c(t1.x, t2.x, vh.x)),
-                y: a.mul(c(t1.y, t2.y, vh.y)),
+                y: av.mul(c(t1.y, t2.y, vh.y)),
                 z: c(t1.z, t2.z, vh.z).max_keep(F4::splat(1e-6)),
             }
             .normalize()
         }
         NormalSampler::Beckmann {
             alpha,
+            alpha_v,
             cos_phi: c,
             sin_phi: s,
             ..
         } => {
             // (`cos_phi` holds the slopes across the azimuth.)
             let (sx, sy) = (F4::splat(radial.0), cos_phi);
-            let (c, s, a) = (F4::splat(c), F4::splat(s), F4::splat(alpha));
+            let (c, s, a, av) = (
+                F4::splat(c),
+                F4::splat(s),
+                F4::splat(alpha),
+                F4::splat(alpha_v),
+            );
             let x = a.mul(c.mul(sx).sub(s.mul(sy)));
-            let y = a.mul(s.mul(sx).add(c.mul(sy)));
+            let y = av.mul(s.mul(sx).add(c.mul(sy)));
             V3 {
                 x: x.neg(),
                 y: y.neg(),

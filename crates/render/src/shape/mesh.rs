@@ -312,7 +312,8 @@ impl Mesh {
     }
 
     /// ∂p/∂u of the triangle with corners `ix` and edges `e1`, `e2`: `e1` without texture
-    /// coordinates (or with degenerate ones).
+    /// coordinates (or with degenerate ones), as Mitsuba 3 takes it (anisotropic roughness
+    /// lies along it: `examples/mitsuba/anisotropic.xml`).
     #[inline(always)]
     fn dpdu(&self, ix: [usize; 3], e1: Vec3, e2: Vec3) -> Vec3 {
         if self.uvs.is_empty() {

@@ -111,7 +111,7 @@ impl<'t> Loader<'t> {
             "conductor" | "roughconductor" => Model::Conductor {
                 eta_k: self.conductor_ior(&p)?,
                 reflectance: self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?,
-                mf: if kind == "roughconductor" { Some(self.microfacet(&p)?) } else { None },
+                mf: if kind == "roughconductor" { Some(self.microfacet(&p, true)?) } else { None },
             },
             "dielectric" | "roughdielectric" => {
                 let (eta, dispersion) = self.dispersive_eta(&p)?;
@@ -120,7 +120,7 @@ impl<'t> Loader<'t> {
                 dispersion,
                 reflectance: self.tex(&p, "specular_reflectance", 1.0, false, &mut textured)?,
                 transmittance: self.tex(&p, "specular_transmittance", 1.0, false, &mut textured)?,
-                mf: if kind == "roughdielectric" { Some(self.microfacet(&p)?) } else { None },
+                mf: if kind == "roughdielectric" { Some(self.microfacet(&p, true)?) } else { None },
             }},
             "plastic" | "roughplastic" => {
                 let kd = self.tex(&p, "diffuse_reflectance", 0.5, false, &mut textured)?;
@@ -130,7 +130,7 @@ impl<'t> Loader<'t> {
                 if kind == "plastic" {
                     Model::Plastic { kd, ks, eta, nonlinear }
                 } else {
-                    let coating = Box::new(RoughCoating::new(self.microfacet(&p)?, eta));
+                    let coating = Box::new(RoughCoating::new(self.microfacet(&p, false)?, eta));
                     Model::RoughPlastic { kd, ks, coating, nonlinear }
                 }
             }
@@ -148,29 +148,37 @@ impl<'t> Loader<'t> {
         Ok((model, false, textured, None))
     }
 
-    /// `distribution` and `alpha` (or equal `alpha_u`, `alpha_v`).
-    fn microfacet(&self, p: &Props) -> Result<Microfacet, SceneError> {
+    /// `distribution` and `alpha`, or `alpha_u` and `alpha_v` (anisotropic, along the surface's
+    /// u and v directions, where `anisotropic`: conductors and dielectrics, as in Mitsuba).
+    fn microfacet(&self, p: &Props, anisotropic: bool) -> Result<Microfacet, SceneError> {
         let dist = match p.choice("distribution", &["beckmann", "ggx"])?.as_str() {
             "ggx" => Distribution::Ggx,
             _ => Distribution::Beckmann,
         };
         let range = (0.0, 1e4);
-        let mut alpha = p.number_in("alpha", 0.1, range)?;
+        let alpha = p.number_in("alpha", 0.1, range)?;
+        p.ignore(&["sample_visible"]);
+        let clamp = |a: f64| a.max(MIN_ALPHA) as f32;
         if p.has("alpha_u") || p.has("alpha_v") {
+            if p.has("alpha") {
+                return Err(p.error(
+                    p.pos("alpha"),
+                    "give either 'alpha' or 'alpha_u' and 'alpha_v', not both",
+                ));
+            }
             let (u, v) = (
                 p.number_in("alpha_u", 0.1, range)?,
                 p.number_in("alpha_v", 0.1, range)?,
             );
-            if u != v {
+            if u != v && !anisotropic {
                 return Err(p.error(
                     p.pos("alpha_u"),
-                    "anisotropic roughness (alpha_u ≠ alpha_v) is not supported",
+                    "roughplastic is isotropic (as in Mitsuba): give 'alpha', or equal 'alpha_u' and 'alpha_v'",
                 ));
             }
-            alpha = u;
+            return Ok(Microfacet::anisotropic(dist, clamp(u), clamp(v)));
         }
-        p.ignore(&["sample_visible"]);
-        Ok(Microfacet::new(dist, alpha.max(MIN_ALPHA) as f32))
+        Ok(Microfacet::new(dist, clamp(alpha)))
     }
 
     /// The relative index `int_ior / ext_ior`; each is a number or a named material.

@@ -388,7 +388,7 @@ impl Path {
             Some((lambert, lane)) => (Some(lambert), lane),
             None => (None, 0),
         };
-        // The models the lanes shade: Lambert's, a rough GGX conductor (its α and complex
+        // The models the lanes shade: Lambert's, a rough isotropic GGX conductor (its α and complex
         // index), a rough plastic with a GGX coating.
         let lane_model = match &material.model {
             Model::Diffuse { reflectance } => Some((reflectance, LaneModel::Lambert)),
@@ -396,7 +396,7 @@ impl Path {
                 eta_k,
                 reflectance,
                 mf: Some(mf),
-            } if mf.dist == Distribution::Ggx => {
+            } if mf.dist == Distribution::Ggx && mf.is_isotropic() => {
                 Some((reflectance, LaneModel::Conductor(mf.alpha, eta_k)))
             }
             Model::RoughPlastic {
