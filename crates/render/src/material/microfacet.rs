@@ -7,9 +7,9 @@
 //! isotropic one of roughness 1, whose formulas they take with the roughness along a
 //! direction's azimuth.
 //! Both sample the distribution of visible normals: GGX by Heitz 2018's projected-disk
-//! construction, Beckmann by inverting the visible slopes' distribution (Heitz and d'Eon 2014,
-//! with Jakob 2014's Newton–bisection in the error function's range), as Mitsuba does by
-//! default. Beckmann's masking term is Smith's exact Λ (through the error function), so that
+//! construction, Beckmann by inverting the visible slopes' distribution (Heitz and d'Eon 2014)
+//! by Newton's method on the slope, kept in a bracket by bisection (Jakob 2014 iterates in the
+//! error function's range instead), as Mitsuba does by default. Beckmann's masking term is Smith's exact Λ (through the error function), so that
 //! the density of its visible normals integrates to 1.
 //! GGX's D, G1 and sample are repeated on sixteen lanes by the path tracer
 //! (`integrator/path/microfacet_lanes.rs`) and by the rough coating's table (`plastic.rs`):
