@@ -8,6 +8,7 @@ use super::layout::{BvhNode, Kind, Ref, COUNT_MASK, KINDS, KIND_SHIFT, MEDIAN_DE
 use super::Bvh;
 use crate::accel::BuildPrim;
 use crate::geometry::Geometry;
+use crate::simd::F4;
 
 /// Subtrees larger than this are built on separate threads.
 pub(super) const PARALLEL_THRESHOLD: usize = 8192;
@@ -28,8 +29,8 @@ impl BvhNode {
     /// Sets child `i` to `r` with box `b`.
     fn set(&mut self, i: usize, b: &Aabb, r: Ref) {
         for a in 0..3 {
-            self.b[a][i] = b.lo[a];
-            self.b[a + 3][i] = b.hi[a];
+            self.b[a][i] = b.lo()[a];
+            self.b[a + 3][i] = b.hi()[a];
         }
         self.child[i] = r.child;
         self.meta[i] = r.meta;
@@ -107,66 +108,65 @@ impl PrimRef {
         Kind::from_bits(self.hi[3].to_bits())
     }
 
-    /// Twice the centroid.
+    /// The box's corners, their fourth lanes (the id and the kind) zero.
     #[inline(always)]
-    fn centroid2(&self) -> [f32; 4] {
-        [
-            self.lo[0] + self.hi[0],
-            self.lo[1] + self.hi[1],
-            self.lo[2] + self.hi[2],
-            0.0,
-        ]
+    fn corners(&self) -> (F4, F4) {
+        let xyz = F4::load(&[0.0, 0.0, 0.0, 1.0]).eq_mask(F4::splat(0.0));
+        let zero = F4::splat(0.0);
+        (
+            F4::select(xyz, F4::load(&self.lo), zero),
+            F4::select(xyz, F4::load(&self.hi), zero),
+        )
     }
 }
 
-/// A box as four lanes (the fourth unused).
+/// A box as four lanes (the fourth unused), in SSE registers: growing a box by another is one
+/// minimum and one maximum (the binning and partitioning loops are most of a build).
 #[derive(Clone, Copy, Debug)]
 struct Aabb {
-    lo: [f32; 4],
-    hi: [f32; 4],
+    lo: F4,
+    hi: F4,
 }
 
 impl Aabb {
-    const EMPTY: Aabb = Aabb {
-        lo: [f32::INFINITY; 4],
-        hi: [f32::NEG_INFINITY; 4],
-    };
-
     #[inline(always)]
-    fn grow(&mut self, lo: &[f32; 4], hi: &[f32; 4]) {
-        for i in 0..4 {
-            self.lo[i] = if lo[i] < self.lo[i] {
-                lo[i]
-            } else {
-                self.lo[i]
-            };
-            self.hi[i] = if hi[i] > self.hi[i] {
-                hi[i]
-            } else {
-                self.hi[i]
-            };
+    fn empty() -> Aabb {
+        Aabb {
+            lo: F4::splat(f32::INFINITY),
+            hi: F4::splat(f32::NEG_INFINITY),
         }
     }
 
+    /// Grows the box by `[lo, hi]`: per lane `if lo < self.lo { lo } else { self.lo }`, and
+    /// likewise for the maxima.
     #[inline(always)]
-    fn grow_point(&mut self, p: &[f32; 4]) {
-        self.grow(p, p);
+    fn grow(&mut self, lo: F4, hi: F4) {
+        self.lo = lo.min_keep(self.lo);
+        self.hi = hi.max_keep(self.hi);
     }
 
     #[inline(always)]
     fn union(mut self, o: &Aabb) -> Aabb {
-        self.grow(&o.lo, &o.hi);
+        self.grow(o.lo, o.hi);
         self
+    }
+
+    /// The lower corner.
+    #[inline(always)]
+    fn lo(&self) -> [f32; 4] {
+        self.lo.to_array()
+    }
+
+    /// The upper corner.
+    #[inline(always)]
+    fn hi(&self) -> [f32; 4] {
+        self.hi.to_array()
     }
 
     /// Half the surface area (0 when empty).
     #[inline(always)]
     fn half_area(&self) -> f32 {
-        let d = [
-            self.hi[0] - self.lo[0],
-            self.hi[1] - self.lo[1],
-            self.hi[2] - self.lo[2],
-        ];
+        let d = self.hi.sub(self.lo).to_array();
         if d[0] < 0.0 {
             return 0.0;
         }
@@ -186,17 +186,23 @@ struct Info {
 }
 
 impl Info {
-    const EMPTY: Info = Info {
-        b: Aabb::EMPTY,
-        c: Aabb::EMPTY,
-        n: 0,
-        kinds: [0; KINDS],
-    };
+    #[inline(always)]
+    fn empty() -> Info {
+        Info {
+            b: Aabb::empty(),
+            c: Aabb::empty(),
+            n: 0,
+            kinds: [0; KINDS],
+        }
+    }
 
     #[inline(always)]
     fn add(&mut self, p: &PrimRef) {
-        self.b.grow(&p.lo, &p.hi);
-        self.c.grow_point(&p.centroid2());
+        let (lo, hi) = p.corners();
+        self.b.grow(lo, hi);
+        // Twice the centroid.
+        let c = lo.add(hi);
+        self.c.grow(c, c);
         self.n += 1;
         self.kinds[p.kind() as usize] += 1;
     }
@@ -216,9 +222,9 @@ impl Info {
             prims
                 .par_chunks(PARALLEL_BINNING / 4)
                 .map(Info::of)
-                .reduce(|| Info::EMPTY, |a, b| a.merge(&b))
+                .reduce(|| Info::empty(), |a, b| a.merge(&b))
         } else {
-            let mut i = Info::EMPTY;
+            let mut i = Info::empty();
             for p in prims {
                 i.add(p);
             }
@@ -271,7 +277,7 @@ struct Bins {
 impl Bins {
     fn new() -> Self {
         Self {
-            b: [[Aabb::EMPTY; BINS]; 3],
+            b: [[Aabb::empty(); BINS]; 3],
             n: [[0; BINS]; 3],
         }
     }
@@ -292,28 +298,38 @@ impl Bins {
 struct Binner {
     lo: [f32; 4],
     scale: [f32; 4],
+    /// `lo` and `scale` in registers.
+    lo4: F4,
+    scale4: F4,
 }
 
 impl Binner {
     fn new(c: &Aabb) -> Self {
         let mut scale = [0.0; 4];
         for a in 0..3 {
-            let ext = c.hi[a] - c.lo[a];
+            let ext = c.hi()[a] - c.lo()[a];
             if ext > 0.0 {
                 scale[a] = BINS as f32 * 0.999_99 / ext;
             }
         }
-        Self { lo: c.lo, scale }
+        Self {
+            lo: c.lo(),
+            scale,
+            lo4: c.lo,
+            scale4: F4::load(&scale),
+        }
     }
 
+    /// The bins of `p`'s centroid on the three axes: [`Binner::bin`] for each. (A NaN, as a
+    /// negative number, goes to bin 0, as `as usize` would take it.)
     #[inline(always)]
-    fn bins(&self, p: &PrimRef) -> [usize; 3] {
-        let c = p.centroid2();
-        let mut r = [0usize; 3];
-        for a in 0..3 {
-            r[a] = (((c[a] - self.lo[a]) * self.scale[a]) as usize).min(BINS - 1);
-        }
-        r
+    fn bins(&self, c2: F4) -> [usize; 3] {
+        let x = c2
+            .sub(self.lo4)
+            .mul(self.scale4)
+            .max_keep(F4::splat(0.0))
+            .to_array();
+        [0, 1, 2].map(|a| (x[a] as usize).min(BINS - 1))
     }
 
     #[inline(always)]
@@ -331,9 +347,10 @@ impl Binner {
         }
         let mut bins = Bins::new();
         for p in prims {
-            let ix = self.bins(p);
+            let (lo, hi) = p.corners();
+            let ix = self.bins(lo.add(hi));
             for a in 0..3 {
-                bins.b[a][ix[a]].grow(&p.lo, &p.hi);
+                bins.b[a][ix[a]].grow(lo, hi);
                 bins.n[a][ix[a]] += 1;
             }
         }
@@ -373,13 +390,13 @@ fn split(prims: &mut [PrimRef], info: &Info, depth: u32) -> Option<Split> {
             continue;
         }
         let mut right = [0f32; BINS];
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0usize);
+        let (mut acc, mut cnt) = (Aabb::empty(), 0usize);
         for i in (1..BINS).rev() {
             acc = acc.union(&bins.b[a][i]);
             cnt += bins.n[a][i] as usize;
             right[i] = acc.half_area() * prim_cost(cnt, tri);
         }
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0usize);
+        let (mut acc, mut cnt) = (Aabb::empty(), 0usize);
         for i in 1..BINS {
             acc = acc.union(&bins.b[a][i - 1]);
             cnt += bins.n[a][i - 1] as usize;
@@ -410,7 +427,8 @@ fn median_split(prims: &mut [PrimRef], info: &Info) -> Split {
     let n = prims.len();
     let mut axis = 0;
     for a in 1..3 {
-        if info.c.hi[a] - info.c.lo[a] > info.c.hi[axis] - info.c.lo[axis] {
+        let (lo, hi) = (info.c.lo(), info.c.hi());
+        if hi[a] - lo[a] > hi[axis] - lo[axis] {
             axis = a;
         }
     }
@@ -423,7 +441,7 @@ fn median_split(prims: &mut [PrimRef], info: &Info) -> Split {
 /// Reorders so that the elements satisfying `left` come first; returns how many do and the
 /// infos of both parts.
 fn partition(prims: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> Split {
-    let (mut li, mut ri) = (Info::EMPTY, Info::EMPTY);
+    let (mut li, mut ri) = (Info::empty(), Info::empty());
     let (mut i, mut j) = (0usize, prims.len());
     loop {
         while i < j && left(&prims[i]) {
@@ -480,7 +498,7 @@ fn build_node(
     let mut kids = [Kid {
         start: 0,
         end: 0,
-        info: Info::EMPTY,
+        info: Info::empty(),
         leaf: true,
     }; W];
     kids[0] = Kid {
