@@ -222,7 +222,7 @@ impl Info {
             prims
                 .par_chunks(PARALLEL_BINNING / 4)
                 .map(Info::of)
-                .reduce(|| Info::empty(), |a, b| a.merge(&b))
+                .reduce(Info::empty, |a, b| a.merge(&b))
         } else {
             let mut i = Info::empty();
             for p in prims {
