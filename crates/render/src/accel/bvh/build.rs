@@ -320,8 +320,9 @@ impl Binner {
         }
     }
 
-    /// The bins of `p`'s centroid on the three axes: [`Binner::bin`] for each. (A NaN, as a
-    /// negative number, goes to bin 0, as `as usize` would take it.)
+    /// The bins of a doubled centroid `c2` (a primitive's `lo + hi`) on the three axes:
+    /// [`Binner::bin`] for each. (A NaN, as a negative number, goes to bin 0, as `as usize`
+    /// takes it there.)
     #[inline(always)]
     fn bins(&self, c2: F4) -> [usize; 3] {
         let x = c2
