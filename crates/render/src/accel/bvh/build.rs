@@ -298,9 +298,6 @@ impl Bins {
 struct Binner {
     lo: [f32; 4],
     scale: [f32; 4],
-    /// `lo` and `scale` in registers.
-    lo4: F4,
-    scale4: F4,
 }
 
 impl Binner {
@@ -312,12 +309,7 @@ impl Binner {
                 scale[a] = BINS as f32 * 0.999_99 / ext;
             }
         }
-        Self {
-            lo: c.lo(),
-            scale,
-            lo4: c.lo,
-            scale4: F4::load(&scale),
-        }
+        Self { lo: c.lo(), scale }
     }
 
     /// The bins of a doubled centroid `c2` (a primitive's `lo + hi`) on the three axes:
@@ -326,8 +318,8 @@ impl Binner {
     #[inline(always)]
     fn bins(&self, c2: F4) -> [usize; 3] {
         let x = c2
-            .sub(self.lo4)
-            .mul(self.scale4)
+            .sub(F4::load(&self.lo))
+            .mul(F4::load(&self.scale))
             .max_keep(F4::splat(0.0))
             .to_array();
         [0, 1, 2].map(|a| (x[a] as usize).min(BINS - 1))
