@@ -118,6 +118,10 @@ pub(super) struct SurfaceLanes<'s> {
     /// `tri` sample a triangle of a mesh light instead: its corners are in `q_p`, `q_v` and
     /// `q_w`, and 1/area is the mesh's.
     rect: u32,
+    /// The parallelogram light whose shape, normal, 1/area and radiance (on RGB paths) each
+    /// lane holds from an earlier step (its address; 0: none), so that a lane sampling the
+    /// same light again does not write them again.
+    held: [usize; BATCH],
     tri: u32,
     /// Lanes whose first light is a sphere of uniform radiance seen from outside, sampled
     /// here by the cone it subtends (`AreaLight::sample`): its centre is in `q_p`, its radius
@@ -328,6 +332,34 @@ impl<'s> SurfaceLanes<'s> {
         self.tri &= !bit;
         self.sphere &= !bit;
         self.two_sided &= !bit;
+        // A parallelogram light this lane holds already (the same light, on an RGB path):
+        // only its numbers and pick's probability are new. (A scene's one light is sampled
+        // at every vertex; writing its shape, normal and radiance each time was about a tenth
+        // of the instructions of a Cornell box's Lambert vertex.)
+        if let LaneLight::Rect {
+            q,
+            two_sided,
+            u,
+            pick_pdf,
+            ..
+        } = v.light
+        {
+            if self.held[i] == q as *const Parallelogram as usize
+                && matches!(v.lambda, Wavelengths::Rgb)
+            {
+                self.lights[0].clear(bit);
+                self.rect |= bit;
+                if two_sided {
+                    self.two_sided |= bit;
+                }
+                self.u_light[0][i] = u[0];
+                self.u_light[1][i] = u[1];
+                self.pick_pdf[i] = pick_pdf;
+                self.set_path(i, v);
+                return;
+            }
+        }
+        self.held[i] = 0;
         // A light sampled here: its shape (a parallelogram's corner and edges or a triangle's
         // corners, with the unit normal; a sphere's centre and radius) and what all share.
         let here = match v.light {
@@ -393,9 +425,19 @@ impl<'s> SurfaceLanes<'s> {
             self.u_light[0][i] = u[0];
             self.u_light[1][i] = u[1];
             self.pick_pdf[i] = pick_pdf;
+            if let (LaneLight::Rect { q, .. }, Wavelengths::Rgb) = (&v.light, v.lambda) {
+                self.held[i] = *q as *const Parallelogram as usize;
+            }
         } else if !matches!(v.light, LaneLight::Given) {
             self.set_light(i, 0, &v.light);
         }
+        self.set_path(i, v);
+    }
+
+    /// The end of [`SurfaceLanes::set`]: lane `i`'s numbers and path state.
+    #[inline(always)]
+    fn set_path(&mut self, i: usize, v: &LaneVertex) {
+        let bit = 1u32 << i;
         self.u2[0][i] = v.u2[0];
         self.u2[1][i] = v.u2[1];
         self.roulette &= !bit;
@@ -476,6 +518,9 @@ impl<'s> SurfaceLanes<'s> {
         pick_pdf: f32,
     ) {
         let bit = 1u32 << i;
+        if k == 0 {
+            self.held[i] = 0;
+        }
         let l = &mut self.lights[k];
         l.clear(bit);
         if let Some(ls) = ls {
