@@ -1710,6 +1710,133 @@ mod tests {
         assert!(seen.iter().all(|&k| k > 20), "{seen:?}");
     }
 
+    /// A lane that keeps its parallelogram light from an earlier step (`SurfaceLanes::held`)
+    /// shades as lanes put in afresh do, bit for bit: over steps where each lane samples one
+    /// of two parallelograms again, another one, a sphere (whose kernel writes the light's
+    /// normal and radiance), a light's own sample or none, on RGB and spectral paths.
+    #[test]
+    fn lanes_holding_a_light_shade_as_fresh_ones() {
+        let radiance = [
+            Texture::Uniform(crate::color::Rgb::new(6.0, 4.0, 2.5)),
+            Texture::Uniform(crate::color::Rgb::new(1.0, 3.0, 9.0)),
+        ];
+        let white = Texture::Uniform(crate::color::Rgb::new(0.7, 0.6, 0.5));
+        let quads = [
+            Parallelogram::new(
+                Point3::new(-1.0, 3.0, -1.0),
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, 2.0),
+            ),
+            Parallelogram::new(
+                Point3::new(2.0, 1.0, -1.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(0.0, 0.0, 1.5),
+            ),
+        ]
+        .map(|q| q.expect("quad"));
+        let spectral = Wavelengths::sample(0.37);
+        let mut rng = Pcg32::new(9, 3);
+        let mut held = SurfaceLanes::default();
+        let mut kept = 0;
+        for step in 0..40 {
+            let mut fresh = SurfaceLanes::default();
+            for i in 0..BATCH {
+                let u = [rng.next_f32(), rng.next_f32()];
+                let pick_pdf = 0.25 + rng.next_f32();
+                let k = (rng.next_u32() % 8) as usize;
+                let light = match k {
+                    0..=3 => LaneLight::Rect {
+                        q: &quads[k % 2],
+                        inv_area: 1.0 / quads[k % 2].area(),
+                        radiance: &radiance[k % 2],
+                        two_sided: k % 2 == 1,
+                        u,
+                        pick_pdf,
+                    },
+                    4 => LaneLight::Sphere {
+                        c: Point3::new(0.0, 4.0, 0.0),
+                        r: 0.5,
+                        radiance: &radiance[0],
+                        two_sided: false,
+                        u,
+                        pick_pdf,
+                    },
+                    5 => LaneLight::Sample(
+                        LightSample {
+                            wi: Vec3::new(0.3, 0.9, 0.1).normalize(),
+                            li: SampledSpectrum([2.0, 1.0, 0.5, 1.0]),
+                            pdf: 0.8,
+                            delta: false,
+                            target: Target::Surface(
+                                Point3::new(0.6, 3.0, 0.2),
+                                Vec3::new(0.0, -1.0, 0.0).to_normal(),
+                            ),
+                        },
+                        pick_pdf,
+                    ),
+                    _ => LaneLight::None,
+                };
+                if k < 4 && held.held[i] == &quads[k % 2] as *const Parallelogram as usize {
+                    kept += 1;
+                }
+                let n = Vec3::new(rng.next_f32() - 0.5, 1.0, rng.next_f32() - 0.5).normalize();
+                let vertex = LaneVertex {
+                    p: Point3::new(rng.next_f32() * 2.0 - 1.0, 0.0, rng.next_f32() * 2.0 - 1.0),
+                    ng: n.to_normal(),
+                    frame: Frame::from_normal(n.to_normal()),
+                    wo_z: 0.2 + rng.next_f32() * 0.8,
+                    flip: false,
+                    reflectance: &white,
+                    uv: Point2::new(0.0, 0.0),
+                    lambda: if step % 10 == 9 {
+                        &spectral
+                    } else {
+                        &Wavelengths::Rgb
+                    },
+                    beta: SampledSpectrum([1.0; 4]),
+                    light,
+                    u2: [rng.next_f32(), rng.next_f32()],
+                    u_rr: None,
+                    eta_scale: 1.0,
+                };
+                held.set(i, &vertex);
+                fresh.set(i, &vertex);
+            }
+            let mut out = Vec::new();
+            for lanes in [&mut held, &mut fresh] {
+                let mut next = RayBatch::default();
+                let mut shadows = [RayBatch::default(); MAX_SHADOWS];
+                let mut pending = [[SampledSpectrum::ZERO; BATCH]; MAX_SHADOWS];
+                lanes.shade(&mut next, &mut shadows, &mut pending);
+                let l = &lanes.lights[0];
+                let shown = |a: &[L]| -> Vec<u32> {
+                    a.iter()
+                        .flat_map(|x| crate::math::lanes(l.shadow).map(move |i| x[i].to_bits()))
+                        .collect()
+                };
+                let bits = |a: &[L]| -> Vec<u32> {
+                    a.iter()
+                        .flat_map(|x| crate::math::lanes(lanes.alive).map(move |i| x[i].to_bits()))
+                        .collect()
+                };
+                out.push((
+                    (l.shadow, lanes.alive),
+                    shown(&l.c),
+                    shown(&shadows[0].d),
+                    shown(&[shadows[0].tmax]),
+                    bits(&lanes.beta_out),
+                    bits(&[lanes.pdf]),
+                    bits(&next.d),
+                ));
+                lanes.lanes = 0;
+            }
+            assert_eq!(out[0], out[1], "step {step}");
+        }
+        // Many lanes kept their light from the step before (about 80 are expected: a
+        // parallelogram lane finds the same one there one time in four).
+        assert!(kept > 40, "{kept}");
+    }
+
     /// The lanes' sphere-light samples are `AreaLight::sample`'s, bit for bit, at every
     /// instruction set: one-sided and two-sided spheres seen from near and far, the light's
     /// usable samples (and only those) kept, with the pick's probability in the density.
