@@ -192,6 +192,15 @@ mod sse {
                 F4(_mm_castsi128_ps(_mm_add_epi32(bits, adj)))
             }
         }
+
+        /// Each lane truncated towards zero to an integer: `x as i32` for |x| < 2³¹ (one
+        /// `cvttps2dq`; other lanes give `i32::MIN` where `as` would saturate).
+        #[inline(always)]
+        pub(crate) fn trunc_i32(self) -> [i32; 4] {
+            let mut a = [0i32; 4];
+            unsafe { _mm_storeu_si128(a.as_mut_ptr().cast(), _mm_cvttps_epi32(self.0)) };
+            a
+        }
     }
 }
 
@@ -303,5 +312,28 @@ mod portable {
                 f32::from_bits(b.wrapping_add(if b < 0 { -k } else { k }) as u32)
             }))
         }
+        pub(crate) fn trunc_i32(self) -> [i32; 4] {
+            self.0.map(|x| x as i32)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::F4;
+
+    /// `trunc_i32` is `as i32` (towards zero) in every lane, for the values a BVH's bins
+    /// take and for negative ones, fractions and the edges of whole numbers.
+    #[test]
+    fn truncation_is_as_i32() {
+        let mut x = -70.0f32;
+        while x < 70.0 {
+            let v = [x, x.next_up(), x.next_down(), -x];
+            let want = v.map(|x| x as i32);
+            assert_eq!(F4::load(&v).trunc_i32(), want, "{v:?}");
+            x += 0.37;
+        }
+        let v = [15.999_999, -0.999_999_9, 1.0e9, -2.0e9];
+        assert_eq!(F4::load(&v).trunc_i32(), v.map(|x| x as i32));
     }
 }

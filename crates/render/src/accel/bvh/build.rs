@@ -314,21 +314,26 @@ impl Binner {
 
     /// The bins of a doubled centroid `c2` (a primitive's `lo + hi`) on the three axes:
     /// [`Binner::bin`] for each. (A NaN, as a negative number, goes to bin 0, as `as usize`
-    /// takes it there.)
+    /// takes it there.) Clamped to the last bin while still a float, the position is truncated
+    /// in one instruction for all three axes, where three saturating conversions took about
+    /// a fifth of a mesh's build.
     #[inline(always)]
     fn bins(&self, c2: F4) -> [usize; 3] {
         let x = c2
             .sub(F4::load(&self.lo))
             .mul(F4::load(&self.scale))
             .max_keep(F4::splat(0.0))
-            .to_array();
-        [0, 1, 2].map(|a| (x[a] as usize).min(BINS - 1))
+            .min_keep(F4::splat((BINS - 1) as f32))
+            .trunc_i32();
+        [0, 1, 2].map(|a| x[a] as usize)
     }
 
+    /// The bin of primitive `p` on axis `a` (as [`Binner::bins`] gives it: one conversion
+    /// rule for the binning and the partition that follows it).
     #[inline(always)]
     fn bin(&self, p: &PrimRef, a: usize) -> usize {
-        let c = p.lo[a] + p.hi[a];
-        (((c - self.lo[a]) * self.scale[a]) as usize).min(BINS - 1)
+        let (lo, hi) = p.corners();
+        self.bins(lo.add(hi))[a]
     }
 
     fn fill(&self, prims: &[PrimRef]) -> Bins {
