@@ -2,7 +2,8 @@
 
 // Why unsafe code is allowed in this file: the SSE intrinsics are `unsafe` functions; SSE and
 // SSE2 are always present on x86-64, and `_mm_loadu_ps`/`_mm_storeu_ps` read and write through
-// references to `[f32; 4]`, valid for 16 bytes.
+// references to `[f32; 4]`, `_mm_storeu_si128` through a reference to `[i32; 4]`, each valid
+// for 16 bytes (unaligned accesses).
 #![allow(unsafe_code)]
 
 #[cfg(target_arch = "x86_64")]
@@ -20,7 +21,7 @@ mod sse {
     pub(crate) struct F4(__m128);
 
     // SAFETY (every block below): SSE and SSE2 are enabled on every x86-64 CPU; loads and
-    // stores go through references to `[f32; 4]`.
+    // stores go through references to `[f32; 4]` (and `[i32; 4]`), 16 bytes each.
     impl F4 {
         #[inline(always)]
         pub(crate) fn splat(x: f32) -> F4 {
