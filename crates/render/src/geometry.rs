@@ -273,18 +273,22 @@ impl Geometry {
         if self.prims.len() < PREFETCH_PRIMS {
             return;
         }
-        let triangles = || {
-            hits.iter()
-                .enumerate()
-                .filter(move |(i, _)| lanes >> i & 1 != 0)
-                .filter_map(|(_, h)| h.as_ref().and_then(|h| self.triangle(h.prim)))
-        };
-        for (mesh, tri) in triangles() {
-            if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
-                crate::simd::prefetch(ix);
+        // Each hit's mesh and triangle found once, for both stages.
+        let mut found = [(0u32, 0u32); crate::math::BATCH];
+        let mut n = 0;
+        for i in crate::math::lanes(lanes) {
+            let Some(h) = hits.get(i).and_then(Option::as_ref) else {
+                continue;
+            };
+            if let (Some((mesh, tri)), Some(slot)) = (self.triangle(h.prim), found.get_mut(n)) {
+                if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
+                    crate::simd::prefetch(ix);
+                }
+                *slot = (mesh, tri);
+                n += 1;
             }
         }
-        for (mesh, tri) in triangles() {
+        for &(mesh, tri) in &found[..n] {
             self.meshes[mesh as usize].prefetch_vertices(tri);
         }
     }
