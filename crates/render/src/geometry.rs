@@ -280,13 +280,14 @@ impl Geometry {
             let Some(h) = hits.get(i).and_then(Option::as_ref) else {
                 continue;
             };
-            if let (Some((mesh, tri)), Some(slot)) = (self.triangle(h.prim), found.get_mut(n)) {
-                if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
-                    crate::simd::prefetch(ix);
-                }
-                *slot = (mesh, tri);
-                n += 1;
+            let (Some((mesh, tri)), Some(slot)) = (self.triangle(h.prim), found.get_mut(n)) else {
+                continue;
+            };
+            if let Some(ix) = self.meshes[mesh as usize].indices.get(tri as usize) {
+                crate::simd::prefetch(ix);
             }
+            *slot = (mesh, tri);
+            n += 1;
         }
         for &(mesh, tri) in &found[..n] {
             self.meshes[mesh as usize].prefetch_vertices(tri);

@@ -312,11 +312,11 @@ impl Binner {
         Self { lo: c.lo(), scale }
     }
 
-    /// The bins of a doubled centroid `c2` (a primitive's `lo + hi`) on the three axes:
-    /// [`Binner::bin`] for each. (A NaN, as a negative number, goes to bin 0, as `as usize`
-    /// takes it there.) Clamped to the last bin while still a float, the position is truncated
-    /// in one instruction for all three axes, where three saturating conversions took about
-    /// a fifth of a mesh's build.
+    /// The bins of a doubled centroid `c2` (a primitive's `lo + hi`) on the three axes: its
+    /// scaled position from the corner, truncated, between 0 (a NaN and negatives too) and the
+    /// last bin. Clamped while still a float, the position is truncated in one instruction for
+    /// all three axes, where three saturating conversions took about a fifth of a mesh's
+    /// build.
     #[inline(always)]
     fn bins(&self, c2: F4) -> [usize; 3] {
         let x = c2

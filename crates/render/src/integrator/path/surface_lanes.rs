@@ -344,17 +344,10 @@ impl<'s> SurfaceLanes<'s> {
             ..
         } = v.light
         {
-            if self.held[i] == q as *const Parallelogram as usize
-                && matches!(v.lambda, Wavelengths::Rgb)
-            {
+            if self.held[i] == held_key(q) && matches!(v.lambda, Wavelengths::Rgb) {
                 self.lights[0].clear(bit);
                 self.rect |= bit;
-                if two_sided {
-                    self.two_sided |= bit;
-                }
-                self.u_light[0][i] = u[0];
-                self.u_light[1][i] = u[1];
-                self.pick_pdf[i] = pick_pdf;
+                self.set_light_numbers(i, two_sided, u, pick_pdf);
                 self.set_path(i, v);
                 return;
             }
@@ -417,21 +410,28 @@ impl<'s> SurfaceLanes<'s> {
                     self.sphere_r[i] = r;
                 }
             }
-            if two_sided {
-                self.two_sided |= bit;
-            }
             let uv = Point2::new(0.0, 0.0);
             put_texture(&mut l.li, i, radiance, uv, v.lambda, RgbRole::Emission);
-            self.u_light[0][i] = u[0];
-            self.u_light[1][i] = u[1];
-            self.pick_pdf[i] = pick_pdf;
+            self.set_light_numbers(i, two_sided, u, pick_pdf);
             if let (LaneLight::Rect { q, .. }, Wavelengths::Rgb) = (&v.light, v.lambda) {
-                self.held[i] = *q as *const Parallelogram as usize;
+                self.held[i] = held_key(q);
             }
         } else if !matches!(v.light, LaneLight::Given) {
             self.set_light(i, 0, &v.light);
         }
         self.set_path(i, v);
+    }
+
+    /// What changes at every vertex of a light sampled in lane `i`: its sidedness, its pair of
+    /// numbers and the pick's probability.
+    #[inline(always)]
+    fn set_light_numbers(&mut self, i: usize, two_sided: bool, u: [f32; 2], pick_pdf: f32) {
+        if two_sided {
+            self.two_sided |= 1 << i;
+        }
+        self.u_light[0][i] = u[0];
+        self.u_light[1][i] = u[1];
+        self.pick_pdf[i] = pick_pdf;
     }
 
     /// The end of [`SurfaceLanes::set`]: lane `i`'s numbers and path state.
@@ -672,6 +672,12 @@ impl<'s> SurfaceLanes<'s> {
         });
         LaneOutcome { next }
     }
+}
+
+/// What [`SurfaceLanes::held`] records of a parallelogram light: its address.
+#[inline(always)]
+fn held_key(q: &Parallelogram) -> usize {
+    q as *const Parallelogram as usize
 }
 
 /// Lane `i` of `a`: the vector `v`.
@@ -1776,7 +1782,7 @@ mod tests {
                     ),
                     _ => LaneLight::None,
                 };
-                if k < 4 && held.held[i] == &quads[k % 2] as *const Parallelogram as usize {
+                if k < 4 && held.held[i] == held_key(&quads[k % 2]) {
                     kept += 1;
                 }
                 let n = Vec3::new(rng.next_f32() - 0.5, 1.0, rng.next_f32() - 0.5).normalize();
