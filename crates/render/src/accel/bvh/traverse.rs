@@ -375,6 +375,39 @@ impl Bvh {
     }
 }
 
+#[cfg(test)]
+impl Bvh {
+    /// [`Bvh::intersect`] and [`Bvh::occluded`] of `ray` through the kernels compiled for
+    /// `level` at most (a BVH with inner nodes: small ones take no kernel).
+    pub(super) fn hits_at(
+        &self,
+        level: crate::simd::SimdLevel,
+        geometry: &Geometry,
+        ray: &Ray,
+    ) -> (Option<Hit>, bool) {
+        let triangles = !self.tris.is_empty();
+        let closest = crate::simd::run_at(
+            level,
+            One {
+                bvh: self,
+                ray,
+                make: |ray: &Ray| ClosestQuery::new(geometry, ray, triangles),
+                done: |q: ClosestQuery, _| q.best,
+            },
+        );
+        let any = crate::simd::run_at(
+            level,
+            One {
+                bvh: self,
+                ray,
+                make: |ray: &Ray| AnyQuery::new(geometry, ray, triangles),
+                done: |_, visited: u64| visited & FOUND != 0,
+            },
+        );
+        (closest, any)
+    }
+}
+
 /// [`Bvh::traverse_lanes`] as a kernel for [`crate::simd::run`].
 struct Lanes<'a, Q, M, D> {
     bvh: &'a Bvh,
