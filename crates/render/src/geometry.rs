@@ -483,7 +483,7 @@ fn surface_interaction(
         ns: g.ns,
         uv: g.uv,
         dpdu: g.dpdu,
-        wo: -unit(ray.d),
+        wo: -unit_direction(ray.d),
         t: hit.t,
         prim: hit.prim,
         props,
@@ -495,7 +495,7 @@ fn surface_interaction(
 /// tracer's rays, unit to round-off): no square root and division on the way from a hit to
 /// its shading, and a direction unit to the same round-off.
 #[inline(always)]
-fn unit(d: crate::math::Vec3) -> crate::math::Vec3 {
+pub(crate) fn unit_direction(d: crate::math::Vec3) -> crate::math::Vec3 {
     let l2 = d.squared_norm();
     if (l2 - 1.0).abs() <= 1.0 / 1_048_576.0 {
         d
@@ -514,15 +514,15 @@ mod tests {
     #[test]
     fn outgoing_directions_are_unit() {
         let d = Vec3::new(0.6, 0.8, 0.0);
-        assert_eq!(unit(d), d);
+        assert_eq!(unit_direction(d), d);
         let nearly = Vec3::new(0.6f32.next_up(), 0.8, 0.0);
-        assert_eq!(unit(nearly), nearly);
+        assert_eq!(unit_direction(nearly), nearly);
         for d in [
             Vec3::new(3.0, -4.0, 12.0),
             Vec3::new(1e-3, 2e-3, 0.0),
             Vec3::new(0.6, 0.8, 0.01),
         ] {
-            let u = unit(d);
+            let u = unit_direction(d);
             assert!((u.norm() - 1.0).abs() < 1e-6, "{d:?}: {u:?}");
             assert!(u.cross(d).norm() < 1e-6 * d.norm());
         }

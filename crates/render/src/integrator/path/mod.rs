@@ -334,7 +334,9 @@ impl Path {
         let Some(hit) = hit else {
             // Lights at infinity, weighted against their own sampling.
             if st.depth > 0 || !self.hide_emitters {
-                let d = st.ray.d.normalize();
+                // (Unit to round-off already, as the path's rays are: not normalised again.
+                // The square root and division were about 1 % of a frame under a sky.)
+                let d = crate::geometry::unit_direction(st.ray.d);
                 st.l += st.beta * scene.background(&st.lambda);
                 for &i in &scene.infinite_lights {
                     let light = &scene.lights[i as usize];
