@@ -245,6 +245,7 @@ pub enum SimdLevel {
 
 impl SimdLevel {
     /// The widest level this CPU supports, capped by `CANDELA_SIMD` (asked once, then cached).
+    #[inline]
     pub fn detected() -> SimdLevel {
         use std::sync::atomic::{AtomicU8, Ordering};
         static CACHE: AtomicU8 = AtomicU8::new(0);
@@ -253,19 +254,44 @@ impl SimdLevel {
             2 => SimdLevel::Avx2,
             3 => SimdLevel::Avx512,
             _ => {
-                let level = Self::supported().min(match std::env::var("CANDELA_SIMD").as_deref() {
-                    Ok("sse") => SimdLevel::Sse,
-                    Ok("avx2") => SimdLevel::Avx2,
-                    _ => SimdLevel::Avx512,
-                });
+                let level = Self::capped();
                 CACHE.store(level as u8 + 1, Ordering::Relaxed);
                 level
             }
         }
     }
 
-    /// The widest level the CPU supports.
+    /// [`SimdLevel::detected`], asked of the CPU and the environment.
+    #[cold]
+    fn capped() -> SimdLevel {
+        Self::supported().min(match std::env::var("CANDELA_SIMD").as_deref() {
+            Ok("sse") => SimdLevel::Sse,
+            Ok("avx2") => SimdLevel::Avx2,
+            _ => SimdLevel::Avx512,
+        })
+    }
+
+    /// The widest level the CPU supports (asked once, then cached: the sixteen-lane kernels
+    /// ask at every call).
+    #[inline]
     pub fn supported() -> SimdLevel {
+        use std::sync::atomic::{AtomicU8, Ordering};
+        static CACHE: AtomicU8 = AtomicU8::new(0);
+        match CACHE.load(Ordering::Relaxed) {
+            1 => SimdLevel::Sse,
+            2 => SimdLevel::Avx2,
+            3 => SimdLevel::Avx512,
+            _ => {
+                let level = Self::asked();
+                CACHE.store(level as u8 + 1, Ordering::Relaxed);
+                level
+            }
+        }
+    }
+
+    /// [`SimdLevel::supported`], asked of the CPU.
+    #[cold]
+    fn asked() -> SimdLevel {
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx512f") && has_avx2() {
