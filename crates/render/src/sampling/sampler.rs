@@ -51,6 +51,9 @@ impl SamplerKind {
 #[derive(Clone, Copy, Debug)]
 pub struct SampleCursor {
     index: u32,
+    /// `index` with its bits reversed, kept with it: a path traced beside others resumes its
+    /// sample at every vertex, and x86 reverses bits in some twenty instructions.
+    rindex: u32,
     dim: u32,
     rng: Pcg32,
 }
@@ -264,6 +267,7 @@ impl Sampler {
     pub fn cursor(&self) -> SampleCursor {
         SampleCursor {
             index: self.index,
+            rindex: self.rindex,
             dim: self.dim,
             rng: self.rng,
         }
@@ -274,7 +278,7 @@ impl Sampler {
     pub fn resume(&mut self, c: SampleCursor) {
         if c.index != self.index {
             self.index = c.index;
-            self.rindex = c.index.reverse_bits();
+            self.rindex = c.rindex;
             let chunk = c.index & !(CHUNK as u32 - 1);
             if chunk != self.chunk {
                 self.chunk = chunk;
