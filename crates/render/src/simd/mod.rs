@@ -30,6 +30,8 @@
 //   faults.
 #![allow(unsafe_code)]
 
+use std::sync::atomic::{AtomicU8, Ordering};
+
 mod f4;
 mod isa;
 mod wide;
@@ -41,6 +43,26 @@ pub(crate) use isa::{Isa, Sse};
 pub(crate) use wide::Wide;
 #[cfg(target_arch = "x86_64")]
 use wide::{Avx2x2, Avx512, Sse4};
+
+/// What `ask` gives plus one, asked once and then kept in `cache` (0 until asked): the CPU's
+/// features and the environment's caps, read at every kernel call. (Kept plus one, the
+/// callers' tests of the answer are those of the cache's value.)
+#[inline(always)]
+fn cached(cache: &AtomicU8, ask: impl FnOnce() -> u8) -> u8 {
+    match cache.load(Ordering::Relaxed) {
+        0 => ask_once(cache, ask),
+        v => v,
+    }
+}
+
+/// [`cached`]'s first asking, out of the callers' way.
+#[cold]
+#[inline(never)]
+fn ask_once(cache: &AtomicU8, ask: impl FnOnce() -> u8) -> u8 {
+    let v = ask() + 1;
+    cache.store(v, Ordering::Relaxed);
+    v
+}
 
 /// A kernel to run with the best instruction set: its `run` must be `#[inline(always)]` so
 /// that it is compiled into each version.
@@ -64,22 +86,15 @@ fn run_avx2<K: Kernel>(k: K) -> K::Output {
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn has_avx2() -> bool {
-    use std::sync::atomic::{AtomicU8, Ordering};
     static CACHE: AtomicU8 = AtomicU8::new(0);
-    match CACHE.load(Ordering::Relaxed) {
-        1 => false,
-        2 => true,
-        _ => {
-            let yes = std::env::var_os("CANDELA_NO_AVX2").is_none()
-                && std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("bmi1")
-                && std::arch::is_x86_feature_detected!("bmi2")
-                && std::arch::is_x86_feature_detected!("lzcnt")
-                && std::arch::is_x86_feature_detected!("popcnt");
-            CACHE.store(1 + yes as u8, Ordering::Relaxed);
-            yes
-        }
-    }
+    cached(&CACHE, || {
+        (std::env::var_os("CANDELA_NO_AVX2").is_none()
+            && std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("bmi1")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("lzcnt")
+            && std::arch::is_x86_feature_detected!("popcnt")) as u8
+    }) == 2
 }
 
 /// `run_avx2` compiled with the AVX-512VL encodings as well: the same eight-lane operations,
@@ -99,18 +114,11 @@ fn run_avx2_evex<K: Kernel>(k: K) -> K::Output {
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn has_avx512vl() -> bool {
-    use std::sync::atomic::{AtomicU8, Ordering};
     static CACHE: AtomicU8 = AtomicU8::new(0);
-    match CACHE.load(Ordering::Relaxed) {
-        1 => false,
-        2 => true,
-        _ => {
-            let yes = SimdLevel::supported() == SimdLevel::Avx512
-                && std::arch::is_x86_feature_detected!("avx512vl");
-            CACHE.store(1 + yes as u8, Ordering::Relaxed);
-            yes
-        }
-    }
+    cached(&CACHE, || {
+        (SimdLevel::supported() == SimdLevel::Avx512
+            && std::arch::is_x86_feature_detected!("avx512vl")) as u8
+    }) == 2
 }
 
 /// Runs `k` with the best instruction set the CPU has (capped by `CANDELA_SIMD`): AVX2 with
@@ -170,21 +178,14 @@ fn run_avx512_gfni<K: Kernel>(k: K) -> K::Output {
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn has_avx512_gfni() -> bool {
-    use std::sync::atomic::{AtomicU8, Ordering};
     static CACHE: AtomicU8 = AtomicU8::new(0);
-    match CACHE.load(Ordering::Relaxed) {
-        1 => false,
-        2 => true,
-        _ => {
-            let yes = SimdLevel::detected() == SimdLevel::Avx512
-                && std::arch::is_x86_feature_detected!("avx512bw")
-                && std::arch::is_x86_feature_detected!("avx512vl")
-                && std::arch::is_x86_feature_detected!("avx512dq")
-                && std::arch::is_x86_feature_detected!("gfni");
-            CACHE.store(1 + yes as u8, Ordering::Relaxed);
-            yes
-        }
-    }
+    cached(&CACHE, || {
+        (SimdLevel::detected() == SimdLevel::Avx512
+            && std::arch::is_x86_feature_detected!("avx512bw")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+            && std::arch::is_x86_feature_detected!("avx512dq")
+            && std::arch::is_x86_feature_detected!("gfni")) as u8
+    }) == 2
 }
 
 /// Asks for the cache lines of `x` (up to 256 bytes) to be loaded: a hint, no effect on
@@ -247,18 +248,8 @@ impl SimdLevel {
     /// The widest level this CPU supports, capped by `CANDELA_SIMD` (asked once, then cached).
     #[inline]
     pub fn detected() -> SimdLevel {
-        use std::sync::atomic::{AtomicU8, Ordering};
         static CACHE: AtomicU8 = AtomicU8::new(0);
-        match CACHE.load(Ordering::Relaxed) {
-            1 => SimdLevel::Sse,
-            2 => SimdLevel::Avx2,
-            3 => SimdLevel::Avx512,
-            _ => {
-                let level = Self::capped();
-                CACHE.store(level as u8 + 1, Ordering::Relaxed);
-                level
-            }
-        }
+        Self::from_cached(cached(&CACHE, || Self::capped() as u8))
     }
 
     /// [`SimdLevel::detected`], asked of the CPU and the environment.
@@ -275,17 +266,17 @@ impl SimdLevel {
     /// ask at every call).
     #[inline]
     pub fn supported() -> SimdLevel {
-        use std::sync::atomic::{AtomicU8, Ordering};
         static CACHE: AtomicU8 = AtomicU8::new(0);
-        match CACHE.load(Ordering::Relaxed) {
+        Self::from_cached(cached(&CACHE, || Self::asked() as u8))
+    }
+
+    /// The level numbered `v` − 1 (as [`cached`] keeps `level as u8`).
+    #[inline(always)]
+    fn from_cached(v: u8) -> SimdLevel {
+        match v {
             1 => SimdLevel::Sse,
             2 => SimdLevel::Avx2,
-            3 => SimdLevel::Avx512,
-            _ => {
-                let level = Self::asked();
-                CACHE.store(level as u8 + 1, Ordering::Relaxed);
-                level
-            }
+            _ => SimdLevel::Avx512,
         }
     }
 
